@@ -1,0 +1,135 @@
+// The scene model: convex planar polygons with input-face ids, planes and a colour per input
+// face; floor levels with their walkable regions; an eye height and a start eye. Nothing else
+// (DESIGN.md, "Model only what a scene needs").
+//
+// Conventions (DESIGN.md): right-handed, y up, the scene's own units. A polygon is convex and
+// planar with >= 3 vertices, counter-clockwise seen from its front; its plane is n·x = d with
+// |n| = 1 and the front half-space n·x > d.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+namespace walkvis {
+
+struct Plane {
+  glm::dvec3 n{0.0, 1.0, 0.0};  // unit normal
+  double d = 0.0;               // n·x = d on the plane
+};
+
+// A convex planar polygon. Its vertices are Scene::vertices[first_vertex, first_vertex + vertex_count).
+struct Polygon {
+  uint32_t first_vertex = 0;
+  uint32_t vertex_count = 0;
+  uint32_t face_id = 0;  // index into Scene::face_colors; fragments keep their input face's id
+  Plane plane;
+};
+
+// A floor level: every distinct floor height gives the height plane y = floor_y + eye height.
+// The walkable region is a union of convex polygons of the xz-plane, stored as (x, z) pairs.
+// loadScene() normalises every piece to counter-clockwise seen from above (+y), which is a
+// negative shoelace area in (x, z) coordinates; walkable_area is the (positive) total area.
+struct FloorLevel {
+  double floor_y = 0.0;
+  std::vector<std::vector<glm::dvec2>> walkable;
+  double walkable_area = 0.0;
+};
+
+// What the loader changed on the way in. Every input face is counted once in exactly one of
+// kept_faces, split_faces and dropped_*.
+struct LoadReport {
+  uint64_t input_faces = 0;
+  uint64_t kept_faces = 0;             // convex and planar: one polygon each
+  uint64_t split_faces = 0;            // non-convex or non-planar: split into convex pieces
+  uint64_t split_pieces = 0;           // polygons those split faces became
+  uint64_t dropped_zero_area = 0;      // area below the scene's tolerance
+  uint64_t dropped_degenerate = 0;     // fewer than 3 distinct vertices
+  std::vector<std::string> notes;      // anything else the loader wants a user to know
+};
+
+struct Scene {
+  std::string name;                     // the scene argument it was loaded from
+  std::vector<glm::dvec3> vertices;     // polygon vertices, consecutive per polygon
+  std::vector<Polygon> polygons;
+  std::vector<uint32_t> face_colors;    // one per input face id, 0xRRGGBB
+  std::vector<FloorLevel> levels;       // sorted by floor_y, distinct heights
+  double eye_height = 1.7;
+  glm::dvec3 start_eye{0.0};            // on a height plane: floor under it + eye_height
+  double start_yaw = 0.0;               // radians; 0 looks along -z, positive turns towards -x
+  LoadReport report;
+
+  std::span<const glm::dvec3> polygonVertices(const Polygon& p) const {
+    return {vertices.data() + p.first_vertex, p.vertex_count};
+  }
+  std::span<const glm::dvec3> polygonVertices(size_t i) const { return polygonVertices(polygons[i]); }
+};
+
+// Thrown for bad input while loading or parsing: the message is one line that names the file
+// (and line, where there is one) and what is wrong. The command line prints it and exits 2.
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct LoadOptions {
+  double eye_height = -1.0;  // < 0: the format's default (41 for WAD maps, 1.7 otherwise)
+};
+
+// Loads a scene from one scene argument: `model.obj`, `model.gltf`, `model.glb`,
+// `freedoom2.wad:MAP07` (a bare WAD name is also looked up in /usr/share/games/doom), or
+// `gen:NAME?key=value&...` (generators, see generators.h). Throws SceneError on bad input.
+Scene loadScene(const std::string& spec, const LoadOptions& options = {});
+
+// ---- Building a scene (used by every loader and generator) ----
+
+// Adds one input face and gives it a new face id (returned). Vertices are in order around the
+// face, counter-clockwise seen from the front; any count. A convex planar face becomes one
+// polygon; a non-convex or non-planar one is split into convex planar pieces (CGAL); a face with
+// fewer than 3 distinct vertices or zero area is dropped and counted. Throws SceneError for NaN or
+// infinite coordinates (context names the file or generator in the message).
+uint32_t addFace(Scene& scene, std::span<const glm::dvec3> vertices, uint32_t color,
+                 const std::string& context);
+
+// Adds a planar region given as rings in a plane: rings[0] and any others may be outer boundaries
+// or holes in any orientation; a point is inside when it is inside an odd number of rings. The
+// region is cut into convex pieces that all get one new face id (returned), facing `normal`.
+// `to3d` maps a ring point (u, v) to 3D. Used for Doom sector floors and ceilings.
+uint32_t addPlanarRegion(Scene& scene, const std::vector<std::vector<glm::dvec2>>& rings,
+                         const glm::dvec3& origin, const glm::dvec3& u_axis, const glm::dvec3& v_axis,
+                         uint32_t color, const std::string& context);
+
+// Convex pieces of an odd-winding region given as rings (any orientation, holes allowed),
+// counter-clockwise. Implemented with a CGAL constrained triangulation and Hertel–Mehlhorn merging.
+std::vector<std::vector<glm::dvec2>> convexPartition(const std::vector<std::vector<glm::dvec2>>& rings);
+
+// Derives floor levels from upward-facing horizontal polygons (OBJ, glTF, generators that do not
+// set them): one level per distinct height, its walkable region the union of those polygons.
+void deriveFloorLevels(Scene& scene);
+
+// Sets start_eye (and level heights) after levels exist: the centre of the largest convex piece
+// of the lowest level, at eye height, unless a loader already placed it.
+void placeStartEye(Scene& scene);
+
+// Newell's plane of a polygon loop; n is zero when the loop has no area.
+Plane newellPlane(std::span<const glm::dvec3> vertices);
+
+// A stable colour for an input face id.
+uint32_t faceColor(uint32_t face_id);
+
+// ---- Summaries ----
+
+struct Bounds {
+  glm::dvec3 lo{0.0}, hi{0.0};
+};
+Bounds sceneBounds(const Scene& scene);
+uint64_t triangleCount(const Scene& scene);  // sum over polygons of vertex_count - 2
+// True when every polygon edge is matched by an edge of another polygon running the other way
+// (vertex positions compared exactly).
+bool isClosed(const Scene& scene);
+
+}  // namespace walkvis

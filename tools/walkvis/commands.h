@@ -1,0 +1,30 @@
+// The walkvis command line: a thin layer over the libraries. Each subcommand lives in its own
+// cmd_*.cpp and is registered by main.cpp through one add*Command call.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "scenes/scene.h"
+
+namespace walkvis {
+
+// Set by a subcommand's parse callback; main runs it after parsing and returns its exit status.
+using CommandRunner = std::function<int()>;
+
+// The scene argument and --eye-height, shared by every command that takes a scene.
+struct SceneArgs {
+  std::string scene = "gen:office";
+  double eye_height = -1.0;
+  LoadOptions loadOptions() const { return LoadOptions{eye_height}; }
+};
+void addSceneArgs(CLI::App& sub, SceneArgs& args, bool required = true);
+
+// Exit statuses: 0 success, 1 a check or target failed, 2 bad input or usage.
+constexpr int kExitBadInput = 2;
+
+void addInfoCommand(CLI::App& app, CommandRunner& runner);
+
+}  // namespace walkvis

@@ -1,0 +1,19 @@
+// generateScene: the name of a `gen:NAME?...` scene argument to its generator (generators.h).
+#include <string>
+
+#include "scenes/generators.h"
+
+namespace walkvis {
+
+Scene generateScene(const std::string& name, GeneratorParams& params) {
+  if (name == "office") return generateOffice(params);
+  if (name == "ninefacet") return generateNineFacet(params);
+  if (name == "sphere") return generateSphere(params);
+  if (name == "dome") return generateDome(params);
+  if (name.rfind("hard:", 0) == 0) return generateHardCase(name, params);
+  std::string known = "office, ninefacet, sphere, dome";
+  for (const auto& n : hardCaseNames()) known += ", " + n;
+  throw SceneError("gen:" + name + ": unknown generator (known: " + known + ")");
+}
+
+}  // namespace walkvis

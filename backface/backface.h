@@ -1,0 +1,125 @@
+// Run-time backface culling of a polygon set: one interface, several methods (issue 6).
+//
+//   polygon  plane test per polygon, the baseline                       (polygon_cull.cpp)
+//   mask     normal masks, Zhang & Hoff 1997                             (normal_mask.cpp)
+//   cluster  clustered backface test, Johannsen & Carter 1998            (clustered.cpp)
+//   cone     meshoptimizer meshlet normal cones, the modern peer         (meshlet_cone.cpp)
+//
+// Facing (DESIGN.md): a polygon with plane n·x = d is front-facing for an eye e exactly when e is
+// strictly in its front half-space, n·e > d, evaluated as isFrontFacing() below. Every method is
+// conservative: it never culls a polygon that isFrontFacing() calls front-facing, for any eye
+// (view direction and field of view only sharpen a method; they never make it cull a front face,
+// except the mask option use_view_cone, which is documented where it is declared).
+//
+// Usage: build once (makeBackfaceCuller), then per frame cull(view, unit_culled) into a buffer of
+// unitCount() bytes that the caller owns; cull() allocates nothing. A method culls *units*: a unit
+// is one polygon (polygon, mask), a cluster (cluster) or a meshlet (cone). unitPolygons(u) lists
+// the polygons of unit u; expandToPolygons() turns unit flags into per-polygon flags.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "scenes/scene.h"
+
+namespace walkvis {
+
+// The ground truth every method is checked against: eye strictly in the front half-space.
+inline bool isFrontFacing(const Plane& plane, const glm::dvec3& eye) { return glm::dot(plane.n, eye) > plane.d; }
+
+// The polygons to cull: `polygons` index into `vertices` (Polygon::first_vertex, vertex_count), as
+// in Scene. Planes are taken from Polygon::plane (unit normal). May be empty.
+struct BackfaceInput {
+  std::span<const glm::dvec3> vertices;
+  std::span<const Polygon> polygons;
+};
+inline BackfaceInput backfaceInput(const Scene& scene) { return {scene.vertices, scene.polygons}; }
+
+// One frame's view. view_dir need not be unit length; fov is the full apex angle of the circular
+// view cone in radians (0, pi). Methods that do not use them ignore them.
+struct BackfaceView {
+  glm::dvec3 eye{0.0};
+  glm::dvec3 view_dir{0.0, 0.0, -1.0};
+  double fov = 1.0471975511965976;  // 60 degrees
+};
+
+enum class BackfaceMethod { kPolygon, kMask, kCluster, kCone };
+// "polygon", "mask", "cluster", "cone"; parseBackfaceMethod throws SceneError for anything else.
+std::string_view backfaceMethodName(BackfaceMethod method);
+BackfaceMethod parseBackfaceMethod(std::string_view name);
+
+struct BackfaceOptions {
+  // mask: cells per cube-face side (the paper's N; 6·N² <= 2048 clusters, so N in [1, 18]).
+  int mask_resolution = 16;
+  // mask: polygons per spatial group, each with its own view cone (paper §3.2); 0 = one group.
+  uint32_t mask_group_size = 0;
+  // mask: true = the paper's §3.1 cone (view_dir, fov) for every group. That is conservative only
+  // for polygons lying inside the view cone (the ones a frustum keeps); a front face outside the
+  // view cone may be culled. false (default) = each group's cone is the cone from the eye around
+  // the group's bounding sphere (§3.2), conservative for every polygon.
+  bool mask_use_view_cone = false;
+  // cluster: T/R, the time of one cluster test over the time to render one vertex (paper §3).
+  double cluster_tr = 1.0;
+  // cluster: side R of the near-field box, as a multiple of the model's bounding-box diagonal.
+  double cluster_near_field = 10.0;
+  // cluster: arrange the cluster tests in a hierarchy with front-face tests at inner nodes (§2.3).
+  bool cluster_hierarchy = true;
+  // cone: meshlet limits (the issue asks for 64 / 124) and meshoptimizer's cone_weight.
+  uint32_t cone_max_vertices = 64;
+  uint32_t cone_max_triangles = 124;
+  float cone_weight = 0.5f;
+};
+
+class BackfaceCuller {
+ public:
+  virtual ~BackfaceCuller() = default;
+  virtual BackfaceMethod method() const = 0;
+  // Writes unit_culled[u] = 1 when every polygon of unit u is back-facing (not front-facing) for
+  // view.eye, 0 when it may not be. unit_culled.size() must be unitCount(). No allocation.
+  virtual void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const = 0;
+  // Bytes of per-frame test state (what the cull step reads besides the eye); the unit → polygon
+  // lists are not counted: a renderer stores its polygons in that order instead.
+  virtual size_t stateBytes() const = 0;
+
+  size_t polygonCount() const { return polygon_count_; }
+  size_t unitCount() const { return unit_begin_.empty() ? 0 : unit_begin_.size() - 1; }
+  std::span<const uint32_t> unitPolygons(size_t unit) const {
+    return {unit_polygons_.data() + unit_begin_[unit], unit_begin_[unit + 1] - unit_begin_[unit]};
+  }
+
+ protected:
+  size_t polygon_count_ = 0;
+  std::vector<uint32_t> unit_begin_;     // unitCount() + 1 offsets into unit_polygons_
+  std::vector<uint32_t> unit_polygons_;  // polygon indices; a polygon may be in several units (cone)
+};
+
+// Builds a culler. Throws SceneError when an option is out of range or a polygon has a
+// non-finite plane.
+std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const BackfaceInput& input,
+                                                   const BackfaceOptions& options = {});
+
+// polygon_culled[p] = 1 when every unit that holds polygon p is culled (a polygon in no unit is
+// kept). polygon_culled.size() must be culler.polygonCount(). No allocation.
+void expandToPolygons(const BackfaceCuller& culler, std::span<const uint8_t> unit_culled,
+                      std::span<uint8_t> polygon_culled);
+
+// Per-method builders (one file each).
+std::unique_ptr<BackfaceCuller> makePolygonCuller(const BackfaceInput& input);
+std::unique_ptr<BackfaceCuller> makeNormalMaskCuller(const BackfaceInput& input, const BackfaceOptions& options);
+std::unique_ptr<BackfaceCuller> makeClusterCuller(const BackfaceInput& input, const BackfaceOptions& options);
+std::unique_ptr<BackfaceCuller> makeConeCuller(const BackfaceInput& input, const BackfaceOptions& options);
+
+// Johannsen & Carter's near-field culling probability of one cluster test (exposed for tests):
+// the fraction of the cube [-half, half]³ (local coordinates around the origin b) in which
+// Comp_e(N, M)·e − d <= 0.
+double nearFieldCullProbability(const glm::dvec3& n_min, const glm::dvec3& n_max, double d, double half);
+
+}  // namespace walkvis

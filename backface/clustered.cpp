@@ -1,0 +1,429 @@
+// Clustered backface culling: Johannsen & Carter, "Clustered Backface Culling", Journal of
+// Graphics Tools 3(1), 1998 (/work/shared/papers/johannsen-carter1998-clustered-backface.md).
+//
+// §2.1 test: a cluster with normals n_i and plane offsets n_i·p_i is all back-facing from e when
+//   Comp_e'(N, M)·e' − d <= 0,   e' = e − b,   N = min_i n_i,  M = max_i n_i (component-wise),
+//   d = min_i n_i·(p_i − b),    Comp picks N^c where e'^c <= 0 and M^c where e'^c > 0      (8)
+// stored in single precision as N, M, d, b: 40 bytes (§2.4). §2.3 hierarchy: inner nodes merge
+// their children (N* = min, M* = max — the printed formula says min for M*, a slip, DESIGN.md),
+// re-choose b* and recompute d* over their polygons, and add the front-face test
+//   Comp_e'(−M, −N)·e' + max_i n_i·(p_i − b) <= 0  (4 more bytes)
+// so traversal stops at clusters that are all back-facing (culled) or all front-facing (kept).
+// §2.4/§3 origin b: the 8 corners of the cluster's bounding box and its centroid, the one with the
+// highest near-field culling probability (the share of the R×R×R box around b, R = 10 × the
+// model's bounding-box diagonal, in which (8) culls).
+// §3 Algorithm 1, adapted to polygon lists (a polygon plays a tristrip, its vertex count its
+// rendering cost C/R): seed = the remaining polygon with the highest culling probability; add the
+// remaining polygons in order of decreasing n·n_seed while the merge pays off by the cost model;
+// recur on the rest. The merge condition: the paper's derivation
+//   T + (1 − P_C)·C_C < 2T + (1 − P_A)·C_A + (1 − P_B)·C_B
+// gives P_C > (P_A·C_A + P_B·C_B − T) / (C_A + C_B); the printed (9)/(10) carry +T, a sign slip
+// (with +T a merge could never pass, since merging never raises the culling probability above the
+// parts' weighted mean). We use −T. A cluster is capped at kMaxClusterPolygons (ours: keeps the
+// build O(n·cap) on large coplanar regions).
+//
+// Conservative arithmetic: the stored floats are rounded outward (N down, M up, d down, front-test
+// offset up), which only weakens the test; (8) is then evaluated in double with the margin
+// kRelMargin·(|e|₁ + scale) below zero.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+
+#include "backface/backface.h"
+
+namespace walkvis {
+namespace {
+
+constexpr size_t kMaxClusterPolygons = 1024;
+constexpr size_t kCandidateBatch = 256;  // candidates sorted per batch by n·n_seed
+// Rounding of (8) in double, of d and of the ground truth isFrontFacing() together stay below
+// 12·2⁻⁵³·(|e|₁ + |b|₁ + |d| + |n·p|) ≈ 1.4e-15 of those magnitudes; 1e-12 leaves three orders.
+constexpr double kRelMargin = 1e-12;
+// Normal components whose coefficient is below this share of the largest are treated as zero in
+// the probability integral (a heuristic estimate only; keeps the inclusion–exclusion formula from
+// cancelling catastrophically).
+constexpr double kTinyCoefficient = 1e-3;
+
+float floatDown(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -INFINITY);
+  return f;
+}
+float floatUp(double x) {
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, INFINITY);
+  return f;
+}
+
+// x rounded to single precision, as a double. Out of line: GCC 12.2 -O2 dropped the x and y
+// roundings of an inlined `glm::dvec3 b(static_cast<float>(c.x), ...)` in choose() (seen in the
+// object code: one cvtsd2ss of three), which stored an origin b other than the one d was
+// computed for and culled front faces far from the origin (test FarFromOriginNoFrontFaceCulled).
+[[gnu::noinline]] double toFloatPrecision(double x) {
+  volatile float f = static_cast<float>(x);
+  return static_cast<double>(f);
+}
+
+// Share of the unit cube [0,1]³ where a·t <= d.
+double cubeFraction(std::array<double, 3> a, double d) {
+  for (double& c : a) {
+    if (c < 0.0) {  // t → 1 − t turns a negative coefficient positive
+      d -= c;
+      c = -c;
+    }
+  }
+  const double amax = std::max({a[0], a[1], a[2]});
+  std::array<double, 3> kept{};
+  int k = 0;
+  for (double c : a) {
+    if (c > kTinyCoefficient * amax) kept[static_cast<size_t>(k++)] = c;
+  }
+  if (k == 0) return d >= 0.0 ? 1.0 : 0.0;
+  double prod = 1.0, fact = 1.0;
+  for (int i = 0; i < k; ++i) {
+    prod *= kept[static_cast<size_t>(i)];
+    fact *= i + 1;
+  }
+  double sum = 0.0;
+  for (int s = 0; s < (1 << k); ++s) {
+    double shift = d;
+    int bits = 0;
+    for (int i = 0; i < k; ++i) {
+      if (s & (1 << i)) {
+        shift -= kept[static_cast<size_t>(i)];
+        ++bits;
+      }
+    }
+    if (shift > 0.0) sum += ((bits & 1) ? -1.0 : 1.0) * std::pow(shift, k);
+  }
+  return std::clamp(sum / (fact * prod), 0.0, 1.0);
+}
+
+struct Test {  // §2.4: 40 bytes
+  float n[3], m[3], b[3], d;
+};
+static_assert(sizeof(Test) == 40);
+
+struct Node {  // preorder; a leaf is one cluster
+  Test test;
+  float front_d;           // max_i n_i·(p_i − b), rounded up (the front test's extra 4 bytes)
+  uint32_t leaf_begin;     // leaves of the subtree, contiguous in preorder
+  uint32_t leaf_end;
+  uint32_t skip;           // the node after this subtree
+};
+
+struct PolyData {
+  glm::dvec3 n;
+  double dd;  // plane offset n·p
+  glm::dvec3 lo, hi, sum;
+  double vertices;
+};
+
+struct Stats {
+  glm::dvec3 n_min{INFINITY}, n_max{-INFINITY}, lo{INFINITY}, hi{-INFINITY}, sum{0.0};
+  double count = 0.0;  // vertices summed into `sum`
+  double cost = 0.0;   // vertices: rendering cost over R
+  void add(const PolyData& p) {
+    n_min = glm::min(n_min, p.n);
+    n_max = glm::max(n_max, p.n);
+    lo = glm::min(lo, p.lo);
+    hi = glm::max(hi, p.hi);
+    sum += p.sum;
+    count += p.vertices;
+    cost += p.vertices;
+  }
+};
+
+struct Choice {
+  double probability = -1.0;
+  glm::dvec3 b{0.0};
+  double d = 0.0;
+};
+
+class ClusterCuller final : public BackfaceCuller {
+ public:
+  ClusterCuller(const BackfaceInput& input, const BackfaceOptions& options) : hierarchy_(options.cluster_hierarchy) {
+    if (!(options.cluster_tr >= 0.0) || !(options.cluster_near_field > 0.0)) {
+      throw SceneError("backface cluster: cluster_tr must be >= 0 and cluster_near_field > 0");
+    }
+    const size_t count = input.polygons.size();
+    polygon_count_ = count;
+    polys_.resize(count);
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (size_t i = 0; i < count; ++i) {
+      const Polygon& poly = input.polygons[i];
+      PolyData& p = polys_[i];
+      p.n = poly.plane.n;
+      p.dd = poly.plane.d;
+      p.lo = glm::dvec3(INFINITY);
+      p.hi = glm::dvec3(-INFINITY);
+      p.sum = glm::dvec3(0.0);
+      for (uint32_t k = 0; k < poly.vertex_count; ++k) {
+        const glm::dvec3& v = input.vertices[poly.first_vertex + k];
+        p.lo = glm::min(p.lo, v);
+        p.hi = glm::max(p.hi, v);
+        p.sum += v;
+      }
+      p.vertices = poly.vertex_count;
+      lo = glm::min(lo, p.lo);
+      hi = glm::max(hi, p.hi);
+      max_dd_ = std::max(max_dd_, std::abs(p.dd));
+    }
+    const double diag = count ? glm::length(hi - lo) : 0.0;
+    half_ = 0.5 * options.cluster_near_field * (diag > 0.0 ? diag : 1.0);
+
+    formClusters(options.cluster_tr);
+    buildNodes();
+    scale_ = max_dd_;
+    for (const Node& node : nodes_) {
+      const Test& t = node.test;
+      scale_ = std::max(scale_, 2.0 * (std::abs(double{t.b[0]}) + std::abs(double{t.b[1]}) + std::abs(double{t.b[2]})) +
+                                    std::max(std::abs(double{t.d}), std::abs(double{node.front_d})));
+    }
+    polys_.clear();
+    polys_.shrink_to_fit();
+  }
+
+  BackfaceMethod method() const override { return BackfaceMethod::kCluster; }
+  size_t stateBytes() const override {
+    // A leaf needs only its 40-byte test; an inner node adds the front offset and its leaf range
+    // and skip link.
+    const size_t leaves = unitCount();
+    return leaves * sizeof(Test) + (nodes_.size() - leaves) * sizeof(Node);
+  }
+
+  void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
+    const glm::dvec3 e = view.eye;
+    const double margin = kRelMargin * (std::abs(e.x) + std::abs(e.y) + std::abs(e.z) + scale_);
+    uint8_t* out = unit_culled.data();
+    const Node* nodes = nodes_.data();
+    const size_t count = nodes_.size();
+    size_t i = 0;
+    while (i < count) {
+      const Node& node = nodes[i];
+      const Test& t = node.test;
+      const double ex = e.x - t.b[0], ey = e.y - t.b[1], ez = e.z - t.b[2];
+      const double back = (ex > 0.0 ? t.m[0] : t.n[0]) * ex + (ey > 0.0 ? t.m[1] : t.n[1]) * ey +
+                          (ez > 0.0 ? t.m[2] : t.n[2]) * ez - t.d;
+      if (back <= -margin) {
+        std::memset(out + node.leaf_begin, 1, node.leaf_end - node.leaf_begin);
+        i = node.skip;
+        continue;
+      }
+      if (node.leaf_end - node.leaf_begin == 1 && node.skip == i + 1) {
+        out[node.leaf_begin] = 0;
+        ++i;
+        continue;
+      }
+      // Front test: Comp(−M, −N)·e' + max_i n_i·p_i' <= 0; keeping is always safe, no margin.
+      const double front = -(ex > 0.0 ? t.n[0] : t.m[0]) * ex - (ey > 0.0 ? t.n[1] : t.m[1]) * ey -
+                           (ez > 0.0 ? t.n[2] : t.m[2]) * ez + node.front_d;
+      if (front <= 0.0) {
+        std::memset(out + node.leaf_begin, 0, node.leaf_end - node.leaf_begin);
+        i = node.skip;
+        continue;
+      }
+      ++i;
+    }
+  }
+
+ private:
+  // The best of the 9 origin candidates for the polygons `members` with statistics `s`.
+  Choice choose(const Stats& s, std::span<const uint32_t> members) const {
+    std::array<glm::dvec3, 9> candidates;
+    for (int c = 0; c < 8; ++c) {
+      candidates[static_cast<size_t>(c)] =
+          glm::dvec3(c & 1 ? s.hi.x : s.lo.x, c & 2 ? s.hi.y : s.lo.y, c & 4 ? s.hi.z : s.lo.z);
+    }
+    candidates[8] = s.sum / s.count;
+    Choice best;
+    for (const glm::dvec3& candidate : candidates) {
+      // The origin is stored in single precision: evaluate the origin that will be stored.
+      const glm::dvec3 b(toFloatPrecision(candidate.x), toFloatPrecision(candidate.y),
+                         toFloatPrecision(candidate.z));
+      double d = INFINITY;
+      for (uint32_t p : members) d = std::min(d, polys_[p].dd - glm::dot(polys_[p].n, b));
+      const double prob = nearFieldCullProbability(s.n_min, s.n_max, d, half_);
+      if (prob > best.probability) best = {prob, b, d};
+    }
+    return best;
+  }
+
+  void formClusters(double tr) {
+    const size_t count = polys_.size();
+    std::vector<double> single(count);
+    for (size_t i = 0; i < count; ++i) {
+      Stats s;
+      s.add(polys_[i]);
+      const uint32_t id = static_cast<uint32_t>(i);
+      single[i] = choose(s, std::span<const uint32_t>(&id, 1)).probability;
+    }
+    std::vector<uint32_t> seeds(count);
+    std::iota(seeds.begin(), seeds.end(), 0u);
+    std::stable_sort(seeds.begin(), seeds.end(), [&](uint32_t a, uint32_t b) { return single[a] > single[b]; });
+    std::vector<uint8_t> alive(count, 1);
+    std::vector<uint32_t> members, candidates, pool;
+    std::vector<double> key(count);
+    size_t next_seed = 0;
+    unit_begin_.push_back(0);
+    for (size_t left = count; left > 0;) {
+      while (!alive[seeds[next_seed]]) ++next_seed;
+      const uint32_t seed = seeds[next_seed];
+      alive[seed] = 0;
+      --left;
+      members.assign(1, seed);
+      Stats stats;
+      stats.add(polys_[seed]);
+      double p_c = single[seed];
+      // Candidates by decreasing n·n_seed, a batch at a time.
+      pool.clear();
+      for (size_t i = 0; i < count; ++i) {
+        if (alive[i]) {
+          pool.push_back(static_cast<uint32_t>(i));
+          key[i] = -glm::dot(polys_[i].n, polys_[seed].n);
+        }
+      }
+      size_t pool_pos = 0;
+      bool growing = true;
+      while (growing && members.size() < kMaxClusterPolygons && pool_pos < pool.size()) {
+        const size_t batch_end = std::min(pool.size(), pool_pos + kCandidateBatch);
+        auto by_key = [&](uint32_t a, uint32_t b) { return key[a] < key[b] || (key[a] == key[b] && a < b); };
+        std::partial_sort(pool.begin() + static_cast<std::ptrdiff_t>(pool_pos),
+                          pool.begin() + static_cast<std::ptrdiff_t>(batch_end), pool.end(), by_key);
+        for (; pool_pos < batch_end && members.size() < kMaxClusterPolygons; ++pool_pos) {
+          const uint32_t cand = pool[pool_pos];
+          Stats merged = stats;
+          merged.add(polys_[cand]);
+          members.push_back(cand);
+          const double p_merged = choose(merged, members).probability;
+          const double c_a = stats.cost, c_b = polys_[cand].vertices;
+          if (p_merged > (p_c * c_a + single[cand] * c_b - tr) / (c_a + c_b)) {
+            stats = merged;
+            p_c = p_merged;
+            alive[cand] = 0;
+            --left;
+          } else {
+            members.pop_back();
+            growing = false;
+            break;
+          }
+        }
+      }
+      unit_polygons_.insert(unit_polygons_.end(), members.begin(), members.end());
+      unit_begin_.push_back(static_cast<uint32_t>(unit_polygons_.size()));
+    }
+  }
+
+  // Leaf tests, then (with the hierarchy) a binary tree over the leaves by median splits of the
+  // clusters' mean normals along their axis of widest spread; leaves are renumbered in preorder.
+  void buildNodes() {
+    const size_t clusters = unit_begin_.size() - 1;
+    std::vector<uint32_t> order(clusters);
+    std::iota(order.begin(), order.end(), 0u);
+    std::vector<glm::dvec3> mean(clusters, glm::dvec3(0.0));
+    for (size_t c = 0; c < clusters; ++c) {
+      for (uint32_t k = unit_begin_[c]; k < unit_begin_[c + 1]; ++k) mean[c] += polys_[unit_polygons_[k]].n;
+    }
+    std::vector<uint32_t> new_begin{0}, new_polygons;
+    new_polygons.reserve(unit_polygons_.size());
+    if (hierarchy_ && clusters > 1) {
+      buildTree(order, 0, clusters, mean, new_begin, new_polygons);
+    } else {
+      for (size_t c = 0; c < clusters; ++c) emitLeaf(static_cast<uint32_t>(c), new_begin, new_polygons);
+    }
+    unit_begin_ = std::move(new_begin);
+    unit_polygons_ = std::move(new_polygons);
+  }
+
+  void emitLeaf(uint32_t cluster, std::vector<uint32_t>& new_begin, std::vector<uint32_t>& new_polygons) {
+    const std::span<const uint32_t> members(unit_polygons_.data() + unit_begin_[cluster],
+                                            unit_begin_[cluster + 1] - unit_begin_[cluster]);
+    const uint32_t leaf = static_cast<uint32_t>(new_begin.size() - 1);
+    nodes_.push_back(makeNode(members, leaf, leaf + 1));
+    nodes_.back().skip = static_cast<uint32_t>(nodes_.size());
+    new_polygons.insert(new_polygons.end(), members.begin(), members.end());
+    new_begin.push_back(static_cast<uint32_t>(new_polygons.size()));
+  }
+
+  void buildTree(std::vector<uint32_t>& order, size_t begin, size_t end, const std::vector<glm::dvec3>& mean,
+                 std::vector<uint32_t>& new_begin, std::vector<uint32_t>& new_polygons) {
+    if (end - begin == 1) {
+      emitLeaf(order[begin], new_begin, new_polygons);
+      return;
+    }
+    const size_t at = nodes_.size();
+    nodes_.emplace_back();
+    const uint32_t first_leaf = static_cast<uint32_t>(new_begin.size() - 1);
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (size_t i = begin; i < end; ++i) {
+      const glm::dvec3 m = glm::normalize(mean[order[i]]);
+      lo = glm::min(lo, m);
+      hi = glm::max(hi, m);
+    }
+    const glm::dvec3 ext = hi - lo;
+    const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+    const size_t mid = begin + (end - begin) / 2;
+    std::nth_element(order.begin() + static_cast<std::ptrdiff_t>(begin), order.begin() + static_cast<std::ptrdiff_t>(mid),
+                     order.begin() + static_cast<std::ptrdiff_t>(end), [&](uint32_t a, uint32_t b) {
+                       return mean[a][axis] / glm::length(mean[a]) < mean[b][axis] / glm::length(mean[b]);
+                     });
+    buildTree(order, begin, mid, mean, new_begin, new_polygons);
+    buildTree(order, mid, end, mean, new_begin, new_polygons);
+    const uint32_t last_leaf = static_cast<uint32_t>(new_begin.size() - 1);
+    const std::span<const uint32_t> members(new_polygons.data() + new_begin[first_leaf],
+                                            new_begin[last_leaf] - new_begin[first_leaf]);
+    nodes_[at] = makeNode(members, first_leaf, last_leaf);
+    nodes_[at].skip = static_cast<uint32_t>(nodes_.size());
+  }
+
+  Node makeNode(std::span<const uint32_t> members, uint32_t leaf_begin, uint32_t leaf_end) const {
+    Stats s;
+    for (uint32_t p : members) s.add(polys_[p]);
+    const Choice c = choose(s, members);
+    Node node{};
+    for (int k = 0; k < 3; ++k) {
+      node.test.n[k] = floatDown(s.n_min[k]);
+      node.test.m[k] = floatUp(s.n_max[k]);
+      node.test.b[k] = static_cast<float>(c.b[k]);  // exact: c.b was rounded to float in choose()
+    }
+    double d_max = -INFINITY;
+    for (uint32_t p : members) d_max = std::max(d_max, polys_[p].dd - glm::dot(polys_[p].n, c.b));
+    node.test.d = floatDown(c.d);
+    node.front_d = floatUp(d_max);
+    node.leaf_begin = leaf_begin;
+    node.leaf_end = leaf_end;
+    return node;
+  }
+
+  bool hierarchy_;
+  double half_ = 1.0;
+  double max_dd_ = 0.0;
+  double scale_ = 0.0;
+  std::vector<PolyData> polys_;  // build time only
+  std::vector<Node> nodes_;
+};
+
+}  // namespace
+
+double nearFieldCullProbability(const glm::dvec3& n_min, const glm::dvec3& n_max, double d, double half) {
+  // §3: eight octant cubes of edge half around b; in octant s the culling plane has normal
+  // Comp_s(N, M), i.e. coefficient s_c·N^c where s_c < 0 and s_c·M^c where s_c > 0 on |e'^c|.
+  double total = 0.0;
+  for (int o = 0; o < 8; ++o) {
+    std::array<double, 3> a{};
+    for (int c = 0; c < 3; ++c) {
+      const bool positive = (o >> c) & 1;
+      a[static_cast<size_t>(c)] = positive ? n_max[c] : -n_min[c];
+    }
+    total += cubeFraction(a, d / half);
+  }
+  return total / 8.0;
+}
+
+std::unique_ptr<BackfaceCuller> makeClusterCuller(const BackfaceInput& input, const BackfaceOptions& options) {
+  return std::make_unique<ClusterCuller>(input, options);
+}
+
+}  // namespace walkvis

@@ -1,0 +1,169 @@
+// The modern peer: meshlet normal-cone culling from meshoptimizer (Arseny Kapoulkine,
+// https://github.com/zeux/meshoptimizer, Debian libmeshoptimizer-dev): meshopt_buildMeshlets
+// (64 vertices / 124 triangles), meshopt_computeMeshletBounds, and the cone test that the header
+// documents as the one safe for perspective, with the meshlet's bounding sphere:
+//   dot(center − eye, cone_axis) >= cone_cutoff · |center − eye| + radius   → cull.
+// Polygons are fan-triangulated over positions welded by exact equality, made relative to the
+// centre of their bounding box (as a camera-relative renderer would) and rounded to float (the
+// library's input format); the eye is made relative to the same centre in double. A unit is a meshlet; a polygon whose triangles fall into several
+// meshlets is culled only when all of them are (expandToPolygons). State: the sphere and the cone,
+// 32 bytes per meshlet. No margin of ours: this is the library's test as documented, measured as
+// it is (false culls, if any, are the library's float arithmetic and are reported).
+#include <meshoptimizer.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+
+#include "backface/backface.h"
+
+namespace walkvis {
+namespace {
+
+struct ConeBounds {
+  float center[3];
+  float radius;
+  float axis[3];
+  float cutoff;
+};
+static_assert(sizeof(ConeBounds) == 32);
+
+struct Vec3Hash {
+  size_t operator()(const glm::dvec3& v) const {
+    uint64_t h = 1469598103934665603ull;
+    for (int k = 0; k < 3; ++k) {
+      uint64_t bits;
+      std::memcpy(&bits, &v[k], sizeof bits);
+      h = (h ^ bits) * 1099511628211ull;
+    }
+    return static_cast<size_t>(h);
+  }
+};
+
+struct TriKeyHash {
+  size_t operator()(const std::array<uint32_t, 3>& t) const {
+    return (static_cast<size_t>(t[0]) * 73856093u) ^ (static_cast<size_t>(t[1]) * 19349663u) ^
+           (static_cast<size_t>(t[2]) * 83492791u);
+  }
+};
+
+class ConeCuller final : public BackfaceCuller {
+ public:
+  ConeCuller(const BackfaceInput& input, const BackfaceOptions& options) {
+    if (options.cone_max_vertices < 3 || options.cone_max_vertices > 255 || options.cone_max_triangles < 1 ||
+        options.cone_max_triangles > 512 || options.cone_max_triangles % 4 != 0) {
+      throw SceneError("backface cone: meshlet limits must be 3..255 vertices and 4..512 triangles (a multiple of 4)");
+    }
+    polygon_count_ = input.polygons.size();
+    std::unordered_map<glm::dvec3, uint32_t, Vec3Hash> weld;
+    std::vector<float> positions;
+    std::vector<uint32_t> indices, triangle_polygon;
+    if (!input.vertices.empty()) {
+      glm::dvec3 lo(INFINITY), hi(-INFINITY);
+      for (const auto& v : input.vertices) {
+        lo = glm::min(lo, v);
+        hi = glm::max(hi, v);
+      }
+      origin_ = 0.5 * (lo + hi);
+    }
+    auto vertexIndex = [&](const glm::dvec3& v) {
+      auto [it, inserted] = weld.try_emplace(v, static_cast<uint32_t>(weld.size()));
+      if (inserted) {
+        positions.push_back(static_cast<float>(v.x - origin_.x));
+        positions.push_back(static_cast<float>(v.y - origin_.y));
+        positions.push_back(static_cast<float>(v.z - origin_.z));
+      }
+      return it->second;
+    };
+    for (size_t p = 0; p < input.polygons.size(); ++p) {
+      const Polygon& poly = input.polygons[p];
+      const uint32_t first = vertexIndex(input.vertices[poly.first_vertex]);
+      uint32_t prev = vertexIndex(input.vertices[poly.first_vertex + 1]);
+      for (uint32_t k = 2; k < poly.vertex_count; ++k) {
+        const uint32_t next = vertexIndex(input.vertices[poly.first_vertex + k]);
+        indices.insert(indices.end(), {first, prev, next});
+        triangle_polygon.push_back(static_cast<uint32_t>(p));
+        prev = next;
+      }
+    }
+    unit_begin_.push_back(0);
+    if (indices.empty()) return;
+    const size_t vertex_count = positions.size() / 3;
+    const size_t max_meshlets =
+        meshopt_buildMeshletsBound(indices.size(), options.cone_max_vertices, options.cone_max_triangles);
+    std::vector<meshopt_Meshlet> meshlets(max_meshlets);
+    std::vector<unsigned int> meshlet_vertices(max_meshlets * options.cone_max_vertices);
+    std::vector<unsigned char> meshlet_triangles(max_meshlets * options.cone_max_triangles * 3);
+    const size_t meshlet_count = meshopt_buildMeshlets(
+        meshlets.data(), meshlet_vertices.data(), meshlet_triangles.data(), indices.data(), indices.size(),
+        positions.data(), vertex_count, 3 * sizeof(float), options.cone_max_vertices, options.cone_max_triangles,
+        options.cone_weight);
+
+    // Meshlets hold local triangles; find each one's polygon through its (sorted) vertex triple.
+    std::unordered_map<std::array<uint32_t, 3>, std::vector<uint32_t>, TriKeyHash> by_key;
+    for (size_t t = 0; t < triangle_polygon.size(); ++t) {
+      std::array<uint32_t, 3> key{indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]};
+      std::sort(key.begin(), key.end());
+      by_key[key].push_back(triangle_polygon[t]);
+    }
+    bounds_.reserve(meshlet_count);
+    std::vector<uint32_t> unit;
+    for (size_t m = 0; m < meshlet_count; ++m) {
+      const meshopt_Meshlet& ml = meshlets[m];
+      const meshopt_Bounds b =
+          meshopt_computeMeshletBounds(&meshlet_vertices[ml.vertex_offset], &meshlet_triangles[ml.triangle_offset],
+                                       ml.triangle_count, positions.data(), vertex_count, 3 * sizeof(float));
+      bounds_.push_back({{b.center[0], b.center[1], b.center[2]},
+                         b.radius,
+                         {b.cone_axis[0], b.cone_axis[1], b.cone_axis[2]},
+                         b.cone_cutoff});
+      unit.clear();
+      for (uint32_t t = 0; t < ml.triangle_count; ++t) {
+        std::array<uint32_t, 3> key;
+        for (int k = 0; k < 3; ++k) {
+          key[static_cast<size_t>(k)] =
+              meshlet_vertices[ml.vertex_offset + meshlet_triangles[ml.triangle_offset + 3 * t + static_cast<uint32_t>(k)]];
+        }
+        std::sort(key.begin(), key.end());
+        auto it = by_key.find(key);
+        if (it == by_key.end() || it->second.empty()) {
+          throw SceneError("backface cone: meshoptimizer returned a triangle that is not in the input");
+        }
+        unit.push_back(it->second.back());
+        it->second.pop_back();
+      }
+      std::sort(unit.begin(), unit.end());
+      unit.erase(std::unique(unit.begin(), unit.end()), unit.end());
+      unit_polygons_.insert(unit_polygons_.end(), unit.begin(), unit.end());
+      unit_begin_.push_back(static_cast<uint32_t>(unit_polygons_.size()));
+    }
+  }
+
+  BackfaceMethod method() const override { return BackfaceMethod::kCone; }
+  size_t stateBytes() const override { return bounds_.size() * sizeof(ConeBounds); }
+
+  void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
+    const double ex = view.eye.x - origin_.x, ey = view.eye.y - origin_.y, ez = view.eye.z - origin_.z;
+    const size_t n = bounds_.size();
+    for (size_t m = 0; m < n; ++m) {
+      const ConeBounds& b = bounds_[m];
+      const double dx = b.center[0] - ex, dy = b.center[1] - ey, dz = b.center[2] - ez;
+      const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      unit_culled[m] = dx * b.axis[0] + dy * b.axis[1] + dz * b.axis[2] >= b.cutoff * len + b.radius;
+    }
+  }
+
+ private:
+  glm::dvec3 origin_{0.0};
+  std::vector<ConeBounds> bounds_;
+};
+
+}  // namespace
+
+std::unique_ptr<BackfaceCuller> makeConeCuller(const BackfaceInput& input, const BackfaceOptions& options) {
+  return std::make_unique<ConeCuller>(input, options);
+}
+
+}  // namespace walkvis

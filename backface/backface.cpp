@@ -12,16 +12,17 @@ std::string_view backfaceMethodName(BackfaceMethod method) {
     case BackfaceMethod::kMask: return "mask";
     case BackfaceMethod::kCluster: return "cluster";
     case BackfaceMethod::kCone: return "cone";
+    case BackfaceMethod::kHierarchy: return "hierarchy";
   }
   return "?";
 }
 
 BackfaceMethod parseBackfaceMethod(std::string_view name) {
   for (BackfaceMethod m : {BackfaceMethod::kPolygon, BackfaceMethod::kMask, BackfaceMethod::kCluster,
-                           BackfaceMethod::kCone}) {
+                           BackfaceMethod::kCone, BackfaceMethod::kHierarchy}) {
     if (backfaceMethodName(m) == name) return m;
   }
-  throw SceneError("backface method '" + std::string(name) + "': expected polygon, mask, cluster or cone");
+  throw SceneError("backface method '" + std::string(name) + "': expected polygon, mask, cluster, cone or hierarchy");
 }
 
 std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const BackfaceInput& input,
@@ -41,6 +42,7 @@ std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const 
     case BackfaceMethod::kMask: return makeNormalMaskCuller(input, options);
     case BackfaceMethod::kCluster: return makeClusterCuller(input, options);
     case BackfaceMethod::kCone: return makeConeCuller(input, options);
+    case BackfaceMethod::kHierarchy: return makeHierarchyCuller(input, options);
   }
   throw SceneError("backface: unknown method");
 }

@@ -4,6 +4,7 @@
 //   mask     normal masks, Zhang & Hoff 1997                             (normal_mask.cpp)
 //   cluster  clustered backface test, Johannsen & Carter 1998            (clustered.cpp)
 //   cone     meshoptimizer meshlet normal cones, the modern peer         (meshlet_cone.cpp)
+//   hierarchy  hierarchical back-face computation, Kumar et al. 1996    (hierarchical_kumar.cpp, kumar.h)
 //
 // Facing (DESIGN.md): a polygon with plane n·x = d is front-facing for an eye e exactly when e is
 // strictly in its front half-space, n·e > d, evaluated as isFrontFacing() below. Every method is
@@ -51,8 +52,8 @@ struct BackfaceView {
   double fov = 1.0471975511965976;  // 60 degrees
 };
 
-enum class BackfaceMethod { kPolygon, kMask, kCluster, kCone };
-// "polygon", "mask", "cluster", "cone"; parseBackfaceMethod throws SceneError for anything else.
+enum class BackfaceMethod { kPolygon, kMask, kCluster, kCone, kHierarchy };
+// "polygon", "mask", "cluster", "cone", "hierarchy"; parseBackfaceMethod throws SceneError for anything else.
 std::string_view backfaceMethodName(BackfaceMethod method);
 BackfaceMethod parseBackfaceMethod(std::string_view name);
 
@@ -76,6 +77,12 @@ struct BackfaceOptions {
   uint32_t cone_max_vertices = 64;
   uint32_t cone_max_triangles = 124;
   float cone_weight = 0.5f;
+  // hierarchy (Kumar et al.): polygons per leaf cluster (the paper's 20), top-level normal cells
+  // per cube-face side, and the eye move (share of the model diagonal) that skips tracking.
+  // Its cull() updates tracking state: one culler per thread.
+  uint32_t hierarchy_leaf_size = 20;
+  int hierarchy_top_grid = 2;
+  double hierarchy_jump = 0.5;
 };
 
 class BackfaceCuller {
@@ -116,6 +123,7 @@ std::unique_ptr<BackfaceCuller> makePolygonCuller(const BackfaceInput& input);
 std::unique_ptr<BackfaceCuller> makeNormalMaskCuller(const BackfaceInput& input, const BackfaceOptions& options);
 std::unique_ptr<BackfaceCuller> makeClusterCuller(const BackfaceInput& input, const BackfaceOptions& options);
 std::unique_ptr<BackfaceCuller> makeConeCuller(const BackfaceInput& input, const BackfaceOptions& options);
+std::unique_ptr<BackfaceCuller> makeHierarchyCuller(const BackfaceInput& input, const BackfaceOptions& options);
 
 // Johannsen & Carter's near-field culling probability of one cluster test (exposed for tests):
 // the fraction of the cube [-half, half]³ (local coordinates around the origin b) in which

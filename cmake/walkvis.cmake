@@ -29,5 +29,8 @@ function(walkvis_library name dir)
     target_compile_options(${name}_cgal PRIVATE ${WALKVIS_WARNINGS})
     target_link_libraries(${name}_cgal PUBLIC glm::glm ${ARG_DEPS} PRIVATE CGAL::CGAL)
     target_link_libraries(${name} PRIVATE ${name}_cgal)
+    # The CGAL half may call back into the rest of its library: a cycle CMake resolves by
+    # repeating the two static libraries on the link line.
+    target_link_libraries(${name}_cgal PRIVATE ${name})
   endif()
 endfunction()

@@ -26,5 +26,9 @@ void addSceneArgs(CLI::App& sub, SceneArgs& args, bool required = true);
 constexpr int kExitBadInput = 2;
 
 void addInfoCommand(CLI::App& app, CommandRunner& runner);
+void addBenchCommand(CLI::App& app, CommandRunner& runner);
+void addBenchBackface(CLI::App& bench, CommandRunner& runner);  // cmd_bench_backface.cpp: `bench backface`
+void addValidateCommand(CLI::App& app, CommandRunner& runner);
+void addBuildCommand(CLI::App& app, CommandRunner& runner);
 
 }  // namespace walkvis

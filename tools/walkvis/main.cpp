@@ -23,6 +23,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   CommandRunner runner;
   addInfoCommand(app, runner);
+  addBenchCommand(app, runner);
+  addValidateCommand(app, runner);
+  addBuildCommand(app, runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

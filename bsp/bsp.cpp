@@ -1,0 +1,175 @@
+// BSP tree: build wrapper (validation, statistics) and traversal.
+// Source: H. Fuchs, Z. M. Kedem, B. F. Naylor, "On visible surface generation by a priori tree
+// structures", SIGGRAPH 1980: back-to-front for an eye v is the far subtree, the node's
+// polygons, the near subtree; front-to-back is the reverse.
+#include "bsp/bsp.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "bsp/bsp_internal.h"
+#include "bsp/exact_sign.h"
+
+namespace walkvis {
+
+namespace {
+
+void validate(const Scene& scene) {
+  if (scene.polygons.size() >= UINT32_MAX / 2)
+    throw SceneError("bsp: " + scene.name + ": too many polygons (" + std::to_string(scene.polygons.size()) + ")");
+  for (size_t i = 0; i < scene.polygons.size(); ++i) {
+    const Polygon& p = scene.polygons[i];
+    const std::string where = "bsp: " + scene.name + ": polygon " + std::to_string(i);
+    if (p.vertex_count < 3) throw SceneError(where + " has fewer than 3 vertices");
+    if (static_cast<uint64_t>(p.first_vertex) + p.vertex_count > scene.vertices.size())
+      throw SceneError(where + " has vertices out of range");
+    const Plane& pl = p.plane;
+    if (!(std::isfinite(pl.n.x) && std::isfinite(pl.n.y) && std::isfinite(pl.n.z) && std::isfinite(pl.d)))
+      throw SceneError(where + " has a non-finite plane");
+    if (pl.n.x == 0.0 && pl.n.y == 0.0 && pl.n.z == 0.0) throw SceneError(where + " has a zero normal");
+    for (const glm::dvec3& v : scene.polygonVertices(p))
+      if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)))
+        throw SceneError(where + " has a non-finite vertex");
+  }
+}
+
+void computeStats(BspTree& tree, size_t input_polygons) {
+  BspStats& s = tree.stats;
+  s.nodes = tree.nodes.size();
+  s.fragments = tree.fragments.size();
+  s.input_polygons = input_polygons;
+  s.ratio = input_polygons ? static_cast<double>(s.fragments) / static_cast<double>(input_polygons) : 0.0;
+  s.depth_max = 0;
+  double depth_sum = 0.0;
+  for (const BspNode& node : tree.nodes) {
+    s.depth_max = std::max(s.depth_max, node.depth);
+    depth_sum += static_cast<double>(node.depth) * node.fragment_count;
+  }
+  s.depth_mean = s.fragments ? depth_sum / static_cast<double>(s.fragments) : 0.0;
+  s.bytes = tree.vertices.size() * sizeof(glm::dvec3) + tree.fragments.size() * sizeof(Polygon) +
+            tree.fragment_polygon.size() * sizeof(uint32_t) + tree.fragment_orientation.size() * sizeof(int8_t) +
+            tree.nodes.size() * sizeof(BspNode);
+}
+
+inline int nodeSide(const BspNode& node, const glm::dvec3& eye) { return planeSide(node.plane, eye); }
+
+// Emits the node's fragments, dropping back faces when asked. `side` is the eye's side of the
+// node plane.
+inline void emitNode(const BspTree& tree, const BspNode& node, int side, const glm::dvec3& eye,
+                     std::vector<uint32_t>& order, bool skip_back_faces) {
+  const uint32_t end = node.first_fragment + node.fragment_count;
+  for (uint32_t f = node.first_fragment; f < end; ++f) {
+    if (skip_back_faces) {
+      const int8_t o = tree.fragment_orientation[f];
+      const int s = o != 0 ? side * o : sideOfPlane(tree, f, eye);
+      if (s <= 0) continue;
+    }
+    order.push_back(f);
+  }
+}
+
+// Stackless in-order walk with parent links, so the per-frame traversal never allocates and never
+// recurses (a degenerate tree may be as deep as it has nodes). The side of a node is recomputed
+// when the walk comes back to it: the same exact answer, no scratch storage.
+void traverse(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order, bool skip_back_faces,
+              bool back_to_front) {
+  order.clear();
+  int32_t cur = tree.root;
+  int32_t prev = -1;
+  while (cur != -1) {
+    const BspNode& node = tree.nodes[static_cast<size_t>(cur)];
+    const int side = nodeSide(node, eye);
+    // Eye in front: the back subtree is far. On the plane either order is right (the halves
+    // cannot overlap as seen from a point of the plane); take the same as in front.
+    const int32_t far_child = side >= 0 ? node.back : node.front;
+    const int32_t near_child = side >= 0 ? node.front : node.back;
+    const int32_t first = back_to_front ? far_child : near_child;
+    const int32_t second = back_to_front ? near_child : far_child;
+    int32_t next;
+    if (prev == node.parent) {
+      if (first != -1) {
+        next = first;
+      } else {
+        emitNode(tree, node, side, eye, order, skip_back_faces);
+        next = second != -1 ? second : node.parent;
+      }
+    } else if (prev == first) {
+      emitNode(tree, node, side, eye, order, skip_back_faces);
+      next = second != -1 ? second : node.parent;
+    } else {
+      next = node.parent;
+    }
+    prev = cur;
+    cur = next;
+  }
+}
+
+}  // namespace
+
+BspTree buildBsp(const Scene& scene, const BspOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(scene);
+  BspTree tree;
+  tree.stats.exact_fallbacks = detail::buildBspExact(scene, options, tree);
+  tree.scene_hash = sceneHash(scene);
+  computeStats(tree, scene.polygons.size());
+  tree.stats.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return tree;
+}
+
+int planeSide(const Plane& plane, const glm::dvec3& p) {
+  return exact::planeSign(plane.n.x, plane.n.y, plane.n.z, plane.d, p.x, p.y, p.z);
+}
+
+int sideOfPlane(const BspTree& tree, uint32_t fragment, const glm::dvec3& point) {
+  return planeSide(tree.fragments[fragment].plane, point);
+}
+
+void backToFront(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order, bool skip_back_faces) {
+  traverse(tree, eye, order, skip_back_faces, true);
+}
+
+void frontToBack(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order, bool skip_back_faces) {
+  traverse(tree, eye, order, skip_back_faces, false);
+}
+
+uint64_t sceneHash(const Scene& scene) {
+  // FNV-1a over the bytes of every polygon's vertices, plane and face id.
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, size_t size) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < size; ++i) {
+      h ^= b[i];
+      h *= 1099511628211ull;
+    }
+  };
+  auto mixDouble = [&mix](double v) { mix(&v, sizeof v); };
+  const uint64_t count = scene.polygons.size();
+  mix(&count, sizeof count);
+  for (const Polygon& p : scene.polygons) {
+    mix(&p.face_id, sizeof p.face_id);
+    mix(&p.vertex_count, sizeof p.vertex_count);
+    mixDouble(p.plane.n.x);
+    mixDouble(p.plane.n.y);
+    mixDouble(p.plane.n.z);
+    mixDouble(p.plane.d);
+    for (const glm::dvec3& v : scene.polygonVertices(p)) {
+      mixDouble(v.x);
+      mixDouble(v.y);
+      mixDouble(v.z);
+    }
+  }
+  return h;
+}
+
+void checkBspMatchesScene(const BspTree& tree, const Scene& scene, const std::string& context) {
+  if (tree.scene_hash != sceneHash(scene))
+    throw SceneError(context + ": BSP tree was built from another scene than " + scene.name);
+  if (tree.stats.input_polygons != scene.polygons.size())
+    throw SceneError(context + ": BSP tree was built from " + std::to_string(tree.stats.input_polygons) +
+                     " polygons, " + scene.name + " has " + std::to_string(scene.polygons.size()));
+}
+
+}  // namespace walkvis

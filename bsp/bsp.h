@@ -1,0 +1,120 @@
+// The exact BSP tree (Fuchs, Kedem, Naylor, "On visible surface generation by a priori tree
+// structures", SIGGRAPH 1980), built by autopartition, with back-to-front and front-to-back
+// traversal for an eye anywhere in space, statistics and a versioned, checksummed file format.
+//
+// Exactness (DESIGN.md, hard cases). Every node plane is the plane of one input polygon, taken as
+// its double coefficients (n, d) read as exact rationals. Each fragment is represented exactly while
+// the tree is built: an input polygon's double vertices are projected exactly onto its own plane
+// (so every fragment is exactly planar), straddlers are split at exact plane/segment
+// intersections, and every vertex is classified against every plane exactly (bsp_build_cgal.cpp).
+// After the build only double approximations of the fragment vertices are kept, for drawing: the
+// ORDER was decided exactly. At query time the side of a double eye against a double plane is an
+// exact sign too (bsp/exact_sign.h). So no point or fragment is ever classified inconsistently,
+// however thin or nearly parallel the input.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "scenes/scene.h"
+
+namespace walkvis {
+
+enum class SplitHeuristic {
+  kLeastCrossed,  // per node: among `candidates` sampled polygons, the one whose plane crosses the fewest
+                  // of (a sample of) the others, ties broken by balance
+  kRandom,        // random-order autopartition: a random polygon of the node's set
+};
+
+struct BspOptions {
+  SplitHeuristic heuristic = SplitHeuristic::kLeastCrossed;
+  uint32_t candidates = 24;  // kLeastCrossed: candidate planes tried per node (>= 1)
+  uint64_t seed = 1;        // both heuristics: the choice is deterministic for a seed
+  // kLeastCrossed: each candidate is scored on up to `samples` polygons of the node's set (all of
+  // them when fewer) as split_weight · crossed − coplanar_weight · coplanar + |front − back|.
+  uint32_t samples = 256;
+  double split_weight = 20.0;
+  double coplanar_weight = 0.0;
+};
+
+struct BspNode {
+  Plane plane;                  // the node plane: exactly Scene::polygons[polygon].plane
+  uint32_t polygon = 0;         // the input polygon (index into Scene::polygons) the plane comes from
+  int32_t front = -1;           // child in n·x > d; -1 = none
+  int32_t back = -1;            // child in n·x < d; -1 = none
+  int32_t parent = -1;          // -1 for the root
+  uint32_t first_fragment = 0;  // fragments [first_fragment, first_fragment + fragment_count) lie in
+  uint32_t fragment_count = 0;  // the node plane (either orientation); count >= 1
+  uint32_t depth = 1;           // root = 1
+};
+
+struct BspStats {
+  uint64_t nodes = 0;
+  uint64_t fragments = 0;       // N
+  uint64_t input_polygons = 0;  // n (polygons of the scene)
+  double ratio = 0.0;           // N / n (0 for an empty scene)
+  uint32_t depth_max = 0;       // nodes on the longest root-to-leaf path
+  double depth_mean = 0.0;      // mean over fragments of their node's depth (tests to reach it)
+  double build_seconds = 0.0;   // wall time of buildBsp
+  uint64_t bytes = 0;           // memory of the tree's arrays (vertices, fragments, nodes, indices)
+  uint64_t exact_fallbacks = 0; // vertex classifications the double filter could not decide
+};
+
+struct BspTree {
+  std::vector<glm::dvec3> vertices;        // double approximations of fragment vertices, consecutive per fragment
+  std::vector<Polygon> fragments;          // face_id = input face id; plane = its input polygon's plane
+  std::vector<uint32_t> fragment_polygon;  // index of the input polygon (Scene::polygons) each fragment came from
+  // Per fragment, its plane relative to its node's plane: +1 the same coefficients, -1 exactly
+  // negated, 0 otherwise (a degenerate fragment that lies in the node plane; ask sideOfPlane).
+  std::vector<int8_t> fragment_orientation;
+  std::vector<BspNode> nodes;              // nodes[root] is the root; children have larger indices
+  int32_t root = -1;                       // -1 for an empty tree
+  uint64_t scene_hash = 0;                 // sceneHash() of the scene it was built from
+  BspStats stats;
+
+  std::span<const glm::dvec3> fragmentVertices(uint32_t f) const {
+    return {vertices.data() + fragments[f].first_vertex, fragments[f].vertex_count};
+  }
+};
+
+// Builds the tree over all polygons of the scene. Throws SceneError for a polygon whose plane is
+// not finite or has a zero normal (Scene's loaders never make one). Deterministic for given options.
+BspTree buildBsp(const Scene& scene, const BspOptions& options = {});
+
+// Fragment indices for `eye`, appended to `order` (cleared first; no allocation once it has the
+// capacity). Back-to-front: a fragment never comes after one that lies in front of it on a ray
+// from the eye. skip_back_faces drops fragments whose front half-space does not contain the eye
+// (eye on the plane counts as back: nothing to see edge-on). The eye may be anywhere in space.
+void backToFront(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order,
+                 bool skip_back_faces = false);
+void frontToBack(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order,
+                 bool skip_back_faces = false);
+
+// Exact side of a point against a plane read as exact rationals: +1 in front (n·p > d), -1
+// behind, 0 on it.
+int planeSide(const Plane& plane, const glm::dvec3& point);
+// Exact side of a point against a fragment's plane: +1 front, -1 back, 0 on.
+int sideOfPlane(const BspTree& tree, uint32_t fragment, const glm::dvec3& point);
+
+// A fingerprint of the scene's polygons (vertices, planes, face ids), so that a loaded tree can
+// be checked against the scene it is used with.
+uint64_t sceneHash(const Scene& scene);
+// Throws SceneError("<context>: ...") when the tree was not built from this scene (its
+// scene_hash differs), e.g. a saved tree loaded for another model or version of it.
+void checkBspMatchesScene(const BspTree& tree, const Scene& scene, const std::string& context);
+
+// Writes the tree atomically (a temporary file next to `path`, then rename). SceneError naming
+// the path when it cannot be written.
+void saveBsp(const BspTree& tree, const std::string& path);
+// Reads a tree written by saveBsp. SceneError naming the path for a missing file, a wrong magic
+// or version, a checksum mismatch, a truncated file or any index out of range; never crashes
+// or allocates more than the file's size implies.
+BspTree loadBsp(const std::string& path);
+// The same from bytes in memory (for tests and fuzzers); `context` names the source in messages.
+BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& context);
+
+}  // namespace walkvis

@@ -1,0 +1,279 @@
+// BSP tree files: versioned, checksummed, written atomically.
+//
+// Layout (little-endian, fields written one by one, no padding):
+//   header  : magic "WVBSP\r\n\x1a" (8), u32 version, u32 0, u64 payload bytes, u64 FNV-1a 64 of the payload
+//   payload : u64 scene_hash, i32 root, stats (u64 nodes, fragments, input_polygons, f64 ratio,
+//             u32 depth_max, f64 depth_mean, build_seconds, u64 bytes, exact_fallbacks),
+//             u64 vertex, fragment and node counts, then the arrays:
+//             vertex   = 3 f64
+//             fragment = u32 first_vertex, vertex_count, face_id, polygon, 4 f64 plane (n, d), i8 orientation
+//             node     = 4 f64 plane, u32 polygon, i32 front, back, parent, u32 first_fragment, fragment_count, depth
+// Loading checks the magic, version, size, checksum and then every index, so that a file that
+// passes can be traversed without further checks (children after parents, parent links
+// consistent, node fragment ranges tiling the fragments).
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "bsp/bsp.h"
+#include "scenes/loaders.h"
+
+namespace walkvis {
+
+namespace {
+
+constexpr char kMagic[8] = {'W', 'V', 'B', 'S', 'P', '\r', '\n', '\x1a'};
+constexpr uint32_t kVersion = 1;
+constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;
+constexpr size_t kVertexBytes = 3 * 8;
+constexpr size_t kFragmentBytes = 4 * 4 + 4 * 8 + 1;
+constexpr size_t kNodeBytes = 4 * 8 + 7 * 4;
+
+uint64_t fnv1a(const uint8_t* data, size_t size) {
+  uint64_t h = 1469598103934665603ull;
+  for (size_t i = 0; i < size; ++i) {
+    h ^= data[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+class Writer {
+ public:
+  template <typename T>
+  void put(T value) {
+    const size_t at = bytes.size();
+    bytes.resize(at + sizeof(T));
+    std::memcpy(bytes.data() + at, &value, sizeof(T));
+  }
+  void putPlane(const Plane& p) {
+    put(p.n.x);
+    put(p.n.y);
+    put(p.n.z);
+    put(p.d);
+  }
+  std::vector<uint8_t> bytes;
+};
+
+class Reader {
+ public:
+  Reader(std::span<const uint8_t> bytes, const std::string& context) : bytes_(bytes), context_(context) {}
+  template <typename T>
+  T get() {
+    if (bytes_.size() - at_ < sizeof(T)) fail("truncated");
+    T value;
+    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+  Plane getPlane() {
+    Plane p;
+    p.n.x = get<double>();
+    p.n.y = get<double>();
+    p.n.z = get<double>();
+    p.d = get<double>();
+    return p;
+  }
+  size_t remaining() const { return bytes_.size() - at_; }
+  [[noreturn]] void fail(const std::string& what) const { throw SceneError(context_ + ": BSP file: " + what); }
+
+ private:
+  std::span<const uint8_t> bytes_;
+  size_t at_ = 0;
+  const std::string& context_;
+};
+
+std::vector<uint8_t> serialize(const BspTree& tree) {
+  Writer w;
+  w.put<uint64_t>(tree.scene_hash);
+  w.put<int32_t>(tree.root);
+  const BspStats& s = tree.stats;
+  w.put<uint64_t>(s.nodes);
+  w.put<uint64_t>(s.fragments);
+  w.put<uint64_t>(s.input_polygons);
+  w.put<double>(s.ratio);
+  w.put<uint32_t>(s.depth_max);
+  w.put<double>(s.depth_mean);
+  w.put<double>(s.build_seconds);
+  w.put<uint64_t>(s.bytes);
+  w.put<uint64_t>(s.exact_fallbacks);
+  w.put<uint64_t>(tree.vertices.size());
+  w.put<uint64_t>(tree.fragments.size());
+  w.put<uint64_t>(tree.nodes.size());
+  for (const glm::dvec3& v : tree.vertices) {
+    w.put(v.x);
+    w.put(v.y);
+    w.put(v.z);
+  }
+  for (size_t i = 0; i < tree.fragments.size(); ++i) {
+    const Polygon& f = tree.fragments[i];
+    w.put<uint32_t>(f.first_vertex);
+    w.put<uint32_t>(f.vertex_count);
+    w.put<uint32_t>(f.face_id);
+    w.put<uint32_t>(tree.fragment_polygon[i]);
+    w.putPlane(f.plane);
+    w.put<int8_t>(tree.fragment_orientation[i]);
+  }
+  for (const BspNode& n : tree.nodes) {
+    w.putPlane(n.plane);
+    w.put<uint32_t>(n.polygon);
+    w.put<int32_t>(n.front);
+    w.put<int32_t>(n.back);
+    w.put<int32_t>(n.parent);
+    w.put<uint32_t>(n.first_fragment);
+    w.put<uint32_t>(n.fragment_count);
+    w.put<uint32_t>(n.depth);
+  }
+  return std::move(w.bytes);
+}
+
+}  // namespace
+
+void saveBsp(const BspTree& tree, const std::string& path) {
+  if (tree.fragment_polygon.size() != tree.fragments.size() ||
+      tree.fragment_orientation.size() != tree.fragments.size())
+    throw SceneError(path + ": BSP tree to save has inconsistent fragment arrays");
+  const std::vector<uint8_t> payload = serialize(tree);
+  Writer header;
+  for (char c : kMagic) header.put<char>(c);
+  header.put<uint32_t>(kVersion);
+  header.put<uint32_t>(0);
+  header.put<uint64_t>(payload.size());
+  header.put<uint64_t>(fnv1a(payload.data(), payload.size()));
+
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw SceneError(path + ": cannot write BSP file (cannot create " + tmp + ")");
+    out.write(reinterpret_cast<const char*>(header.bytes.data()), static_cast<std::streamsize>(header.bytes.size()));
+    out.write(reinterpret_cast<const char*>(payload.data()), static_cast<std::streamsize>(payload.size()));
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);
+      throw SceneError(path + ": cannot write BSP file (write failed)");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw SceneError(path + ": cannot write BSP file (" + ec.message() + ")");
+  }
+}
+
+BspTree loadBsp(const std::string& path) {
+  const std::vector<uint8_t> bytes = readFileBytes(path);
+  return loadBspFromMemory(bytes, path);
+}
+
+BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& context) {
+  Reader head(bytes, context);
+  if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+    head.fail("not a walkvis BSP file (bad magic)");
+  for (size_t i = 0; i < sizeof kMagic; ++i) head.get<char>();
+  const uint32_t version = head.get<uint32_t>();
+  if (version != kVersion)
+    head.fail("version " + std::to_string(version) + ", this build reads version " + std::to_string(kVersion));
+  head.get<uint32_t>();
+  const uint64_t payload_size = head.get<uint64_t>();
+  const uint64_t checksum = head.get<uint64_t>();
+  if (payload_size != bytes.size() - kHeaderBytes)
+    head.fail("truncated or padded (payload " + std::to_string(bytes.size() - kHeaderBytes) + " bytes, header says " +
+              std::to_string(payload_size) + ")");
+  const std::span<const uint8_t> payload = bytes.subspan(kHeaderBytes);
+  if (fnv1a(payload.data(), payload.size()) != checksum) head.fail("checksum mismatch (corrupt file)");
+
+  Reader r(payload, context);
+  BspTree tree;
+  tree.scene_hash = r.get<uint64_t>();
+  tree.root = r.get<int32_t>();
+  BspStats& s = tree.stats;
+  s.nodes = r.get<uint64_t>();
+  s.fragments = r.get<uint64_t>();
+  s.input_polygons = r.get<uint64_t>();
+  s.ratio = r.get<double>();
+  s.depth_max = r.get<uint32_t>();
+  s.depth_mean = r.get<double>();
+  s.build_seconds = r.get<double>();
+  s.bytes = r.get<uint64_t>();
+  s.exact_fallbacks = r.get<uint64_t>();
+  const uint64_t nv = r.get<uint64_t>(), nf = r.get<uint64_t>(), nn = r.get<uint64_t>();
+  // Sizes must match the payload exactly before anything is allocated.
+  if (nv > r.remaining() / kVertexBytes || nf > r.remaining() / kFragmentBytes || nn > r.remaining() / kNodeBytes ||
+      nv * kVertexBytes + nf * kFragmentBytes + nn * kNodeBytes != r.remaining())
+    r.fail("array sizes do not match the file size");
+  if (nv >= UINT32_MAX || nf >= INT32_MAX || nn >= INT32_MAX) r.fail("too many elements");
+  tree.vertices.resize(nv);
+  for (auto& v : tree.vertices) {
+    v.x = r.get<double>();
+    v.y = r.get<double>();
+    v.z = r.get<double>();
+  }
+  tree.fragments.resize(nf);
+  tree.fragment_polygon.resize(nf);
+  tree.fragment_orientation.resize(nf);
+  for (size_t i = 0; i < nf; ++i) {
+    Polygon& f = tree.fragments[i];
+    f.first_vertex = r.get<uint32_t>();
+    f.vertex_count = r.get<uint32_t>();
+    f.face_id = r.get<uint32_t>();
+    tree.fragment_polygon[i] = r.get<uint32_t>();
+    f.plane = r.getPlane();
+    tree.fragment_orientation[i] = r.get<int8_t>();
+    if (f.vertex_count < 3 || static_cast<uint64_t>(f.first_vertex) + f.vertex_count > nv)
+      r.fail("fragment " + std::to_string(i) + " has vertices out of range");
+    if (tree.fragment_orientation[i] < -1 || tree.fragment_orientation[i] > 1)
+      r.fail("fragment " + std::to_string(i) + " has a bad orientation");
+  }
+  tree.nodes.resize(nn);
+  uint64_t next_fragment = 0;
+  for (size_t i = 0; i < nn; ++i) {
+    BspNode& n = tree.nodes[i];
+    n.plane = r.getPlane();
+    n.polygon = r.get<uint32_t>();
+    n.front = r.get<int32_t>();
+    n.back = r.get<int32_t>();
+    n.parent = r.get<int32_t>();
+    n.first_fragment = r.get<uint32_t>();
+    n.fragment_count = r.get<uint32_t>();
+    n.depth = r.get<uint32_t>();
+  }
+  // Structure: root 0 (or none), every other node's parent comes before it and links back to it,
+  // children come after their parent; node fragment ranges are non-empty and disjoint and cover
+  // every fragment (checked in node order after sorting by first fragment is unnecessary: the
+  // writer numbers them in build order, so they are checked as a tiling in any order below).
+  if (nn == 0 ? tree.root != -1 : tree.root != 0) r.fail("bad root");
+  std::vector<uint8_t> covered(nf, 0);
+  for (size_t i = 0; i < nn; ++i) {
+    const BspNode& n = tree.nodes[i];
+    const auto idx = static_cast<int32_t>(i);
+    if (i == 0 ? n.parent != -1 : (n.parent < 0 || n.parent >= idx)) r.fail("node " + std::to_string(i) + ": bad parent");
+    if (i > 0) {
+      const BspNode& p = tree.nodes[static_cast<size_t>(n.parent)];
+      if (p.front != idx && p.back != idx) r.fail("node " + std::to_string(i) + ": parent does not link to it");
+      if (n.depth != p.depth + 1) r.fail("node " + std::to_string(i) + ": bad depth");
+    } else if (n.depth != 1) {
+      r.fail("node 0: bad depth");
+    }
+    for (int32_t c : {n.front, n.back})
+      if (c != -1 && (c <= idx || static_cast<uint64_t>(c) >= nn || tree.nodes[static_cast<size_t>(c)].parent != idx))
+        r.fail("node " + std::to_string(i) + ": bad child");
+    if (n.front != -1 && n.front == n.back) r.fail("node " + std::to_string(i) + ": bad child");
+    if (n.fragment_count == 0 || static_cast<uint64_t>(n.first_fragment) + n.fragment_count > nf)
+      r.fail("node " + std::to_string(i) + ": fragments out of range");
+    for (uint32_t f = n.first_fragment; f < n.first_fragment + n.fragment_count; ++f) {
+      if (covered[f]) r.fail("node " + std::to_string(i) + ": fragment listed twice");
+      covered[f] = 1;
+    }
+    next_fragment += n.fragment_count;
+  }
+  if (next_fragment != nf) r.fail("fragments not covered by nodes");
+  if (s.nodes != nn || s.fragments != nf) r.fail("statistics do not match the arrays");
+  return tree;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,174 @@
+// PFD tree queries (James & Day, "The priority face determination tree for hidden surface
+// removal", Computer Graphics Forum 17(1), 1998; DESIGN.md, "PFD tree"): a root-to-leaf walk
+// that appends each node's runs; the frame-coherent form keeps the prefix of the order that the
+// eye's move did not change (Kumar et al. 1996 track the view point the same way).
+#include <cmath>
+
+#include "pfd_hfd/pfd.h"
+
+namespace walkvis {
+namespace {
+
+inline void appendList(const PfdTree& tree, const PfdNode& node, std::vector<uint32_t>& order) {
+  const uint32_t end = node.first_ref + node.ref_count;
+  for (uint32_t r = node.first_ref; r < end; ++r) {
+    const PfdRun& run = tree.runs[tree.run_refs[r]];
+    const uint32_t* ids = tree.fragment_ids.data() + run.first;
+    order.insert(order.end(), ids, ids + run.count);
+  }
+}
+
+uint64_t splitmix(uint64_t& state) {
+  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+double uniform(uint64_t& state) { return static_cast<double>(splitmix(state) >> 11) * 0x1p-53; }
+
+double triangleArea(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+  return 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+}
+
+}  // namespace
+
+PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order) {
+  order.clear();
+  PfdQueryResult result;
+  if (tree.nodes.empty()) return result;
+  uint32_t i = 0;
+  for (;;) {
+    const PfdNode& node = tree.nodes[i];
+    appendList(tree, node, order);
+    if (node.front < 0) break;
+    const int s = planeSide(tree.planes[node.plane], eye);
+    ++result.tests;
+    result.on_line |= s == 0;
+    i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
+  }
+  return result;
+}
+
+PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs) {
+  runs.clear();
+  PfdQueryResult result;
+  if (tree.nodes.empty()) return result;
+  uint32_t i = 0;
+  for (;;) {
+    const PfdNode& node = tree.nodes[i];
+    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) runs.push_back(tree.runs[tree.run_refs[r]]);
+    if (node.front < 0) break;
+    const int s = planeSide(tree.planes[node.plane], eye);
+    ++result.tests;
+    result.on_line |= s == 0;
+    i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
+  }
+  return result;
+}
+
+PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdCursor& cursor,
+                                std::vector<uint32_t>& order) {
+  PfdQueryResult result;
+  const bool valid = cursor.tree == &tree && !cursor.path.empty() &&
+                     cursor.path.size() == cursor.order_size.size() && order.size() >= cursor.order_size.back();
+  cursor.tree = &tree;
+  if (tree.nodes.empty()) {
+    order.clear();
+    cursor.path.clear();
+    cursor.order_size.clear();
+    return result;
+  }
+  uint32_t cur = 0;
+  if (valid) {
+    // Re-test the stored path; stop at the first node the eye no longer reaches.
+    size_t k = 1;
+    for (; k < cursor.path.size(); ++k) {
+      const PfdNode& node = tree.nodes[cursor.path[k - 1]];
+      const int s = planeSide(tree.planes[node.plane], eye);
+      ++result.tests;
+      result.on_line |= s == 0;
+      cur = static_cast<uint32_t>(s > 0 ? node.front : node.back);
+      if (cur != cursor.path[k]) break;
+    }
+    if (k == cursor.path.size()) return result;  // the same leaf: the order stands
+    order.resize(cursor.order_size[k]);          // keep the lists of path[0, k)
+    cursor.path.resize(k);
+    cursor.order_size.resize(k);
+  } else {
+    order.clear();
+    cursor.path.clear();
+    cursor.order_size.clear();
+  }
+  if (cursor.path.empty()) cur = 0;
+  for (;;) {
+    cursor.path.push_back(cur);
+    cursor.order_size.push_back(static_cast<uint32_t>(order.size()));
+    const PfdNode& node = tree.nodes[cur];
+    appendList(tree, node, order);
+    if (node.front < 0) break;
+    const int s = planeSide(tree.planes[node.plane], eye);
+    ++result.tests;
+    result.on_line |= s == 0;
+    cur = static_cast<uint32_t>(s > 0 ? node.front : node.back);
+  }
+  return result;
+}
+
+glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state) {
+  double total = 0.0;
+  for (const auto& ring : tree.region)
+    for (size_t i = 1; i + 1 < ring.size(); ++i) total += triangleArea(ring[0], ring[i], ring[i + 1]);
+  if (!(total > 0.0)) return {0.0, 0.0};
+  double pick = uniform(rng_state) * total;
+  for (const auto& ring : tree.region) {
+    for (size_t i = 1; i + 1 < ring.size(); ++i) {
+      const double a = triangleArea(ring[0], ring[i], ring[i + 1]);
+      if (pick <= a || (&ring == &tree.region.back() && i + 2 == ring.size())) {
+        double u = uniform(rng_state), v = uniform(rng_state);
+        if (u + v > 1.0) {
+          u = 1.0 - u;
+          v = 1.0 - v;
+        }
+        return ring[0] + u * (ring[i] - ring[0]) + v * (ring[i + 1] - ring[0]);
+      }
+      pick -= a;
+    }
+  }
+  return tree.region.front().front();
+}
+
+void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed) {
+  PfdStats& s = tree.stats;
+  s.bytes = tree.nodes.size() * sizeof(PfdNode) + tree.run_refs.size() * sizeof(uint32_t) +
+            tree.runs.size() * sizeof(PfdRun) + tree.fragment_ids.size() * sizeof(uint32_t) +
+            tree.planes.size() * sizeof(Plane);
+  for (const auto& ring : tree.region) s.bytes += ring.size() * sizeof(glm::dvec2);
+  s.tests_mean = 0.0;
+  s.tests_max = 0;
+  if (eyes == 0 || tree.nodes.empty() || tree.region.empty()) return;
+  uint64_t state = seed;
+  uint64_t sum = 0;
+  for (uint32_t e = 0; e < eyes; ++e) {
+    const glm::dvec2 p = samplePfdRegion(tree, state);
+    const glm::dvec3 eye{p.x, tree.height, p.y};
+    uint64_t tests = 0;
+    for (uint32_t i = 0; tree.nodes[i].front >= 0; ++tests) {
+      const PfdNode& node = tree.nodes[i];
+      i = static_cast<uint32_t>(planeSide(tree.planes[node.plane], eye) > 0 ? node.front : node.back);
+    }
+    sum += tests;
+    s.tests_max = std::max(s.tests_max, tests);
+  }
+  s.tests_mean = static_cast<double>(sum) / eyes;
+}
+
+const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye) {
+  for (const PfdTree& t : level.cells) {
+    if (!t.cell) return &t;
+    if (eye.x >= t.cell->lo.x && eye.x < t.cell->hi.x && eye.z >= t.cell->lo.y && eye.z < t.cell->hi.y) return &t;
+  }
+  return nullptr;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,186 @@
+// The PFD tree (James & Day, "The priority face determination tree for hidden surface removal",
+// Computer Graphics Forum 17(1), 1998; our definition is DESIGN.md, "PFD tree"): a binary decision
+// tree over the walkable region W of one height plane y = h. Each node holds a test-line (a BSP
+// plane cut by the height plane) and a priority list; for an eye v = (x, h, z) the concatenated
+// lists on v's root-to-leaf path draw exactly what backToFront(bsp, v, order, true) draws.
+//
+// Built by partial evaluation of the BSP back-to-front traversal over regions of the height plane
+// (pfd_build_cgal.cpp): wherever the side of the current plane is the same for all of the region,
+// the traversal carries on without a test; where its test-line crosses the region, a node splits
+// the region and both children carry on from the same point of the traversal. Region corners are
+// exact rationals (CGAL), so a test-line through a corner is recognised as touching, not crossing.
+//
+// Layout: every distinct emitted sequence of fragments (a fully resolved BSP subtree, or one
+// node's front-facing fragments) is stored once as a run of `fragment_ids`; a node's list is a
+// range of `run_refs`. A query appends a handful of runs.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "bsp/bsp.h"
+#include "scenes/scene.h"
+
+namespace walkvis {
+
+enum class PfdHeuristic {
+  kTraversal,  // test the first undecided line in BSP traversal order (the baseline)
+  kBalanced,   // among up to `candidates` undecided lines ahead in the traversal, the one that
+               // splits the region's area most evenly
+};
+
+struct PfdOptions {
+  PfdHeuristic heuristic = PfdHeuristic::kBalanced;
+  uint32_t candidates = 16;  // kBalanced: undecided lines examined per split (>= 1)
+  bool dedup = true;         // store each distinct emitted run once (false: one run per emission)
+  // Bytes one tree may take while it is built (its arrays plus the dedup index); 0 = no limit.
+  // Exceeding it throws PfdBudgetError.
+  uint64_t max_memory = 0;
+  uint32_t stat_eyes = 10000;  // random eyes in the region for tests_mean / tests_max (0: skip)
+  uint64_t seed = 1;           // for those eyes
+};
+
+// Thrown when a build would exceed its memory budget.
+struct PfdBudgetError : SceneError {
+  using SceneError::SceneError;
+};
+
+struct PfdStats {
+  uint64_t fragments = 0;         // N: fragments of the BSP
+  uint64_t nodes = 0;             // PFD nodes (leaves included)
+  uint64_t leaves = 0;
+  uint64_t depth_max = 0;         // tests on the longest root-to-leaf path
+  uint64_t list_entries = 0;      // run references stored in node lists
+  uint64_t list_fragments = 0;    // fragment ids the lists would hold without runs (naive storage)
+  uint64_t pool_entries = 0;      // fragment ids stored (each distinct run once)
+  uint64_t runs = 0;              // distinct runs
+  uint64_t test_planes = 0;       // distinct planes used as test-lines
+  uint64_t exact_fallbacks = 0;   // corner-versus-line signs the double filter could not decide
+  uint64_t touching = 0;          // line-versus-region decisions where a corner lay exactly on the line
+  uint64_t decisions = 0;         // line-versus-region decisions in all
+  double tests_mean = 0.0;        // over `stat_eyes` random eyes in the region
+  uint64_t tests_max = 0;
+  double tests_entropy_bound = 0.0;  // Σ −a·log2 a over leaf area fractions a
+  double region_area = 0.0;
+  uint64_t bytes = 0;             // the tree's arrays
+  double build_seconds = 0.0;
+};
+
+struct PfdNode {
+  uint32_t plane = 0;       // test-line: index into PfdTree::planes (internal nodes only)
+  int32_t front = -1;       // child for planeSide(plane, eye) > 0; -1 for a leaf
+  int32_t back = -1;        // child for planeSide(plane, eye) < 0 (and == 0, see pfdQuery)
+  uint32_t first_ref = 0;   // list: run_refs[first_ref, first_ref + ref_count)
+  uint32_t ref_count = 0;
+};
+
+struct PfdRun {
+  uint32_t first = 0;  // fragment_ids[first, first + count)
+  uint32_t count = 0;
+};
+
+// An axis-aligned box of the xz-plane: a view cell. The region of a tree is W clipped to it.
+struct PfdBox {
+  glm::dvec2 lo{0.0}, hi{0.0};
+};
+
+struct PfdTree {
+  double height = 0.0;                          // the height plane y = height
+  std::optional<PfdBox> cell;                   // the view cell, or none: the whole of W
+  std::vector<std::vector<glm::dvec2>> region;  // W ∩ cell as convex (x, z) pieces (double approximations)
+  std::vector<Plane> planes;                    // test-line planes (BSP or fragment planes)
+  std::vector<PfdNode> nodes;                   // nodes[0] is the root; children have larger indices
+  std::vector<uint32_t> run_refs;
+  std::vector<PfdRun> runs;
+  std::vector<uint32_t> fragment_ids;           // BSP fragment indices
+  PfdStats stats;
+};
+
+// Builds the PFD tree of `bsp` over the convex pieces `walkable` ((x, z), any orientation; empty
+// or zero-area pieces are ignored) clipped to `cell` if given, on the height plane y = height.
+// Throws PfdBudgetError when options.max_memory is exceeded, SceneError for non-finite input.
+PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
+                 const std::optional<PfdBox>& cell, const PfdOptions& options = {});
+
+struct PfdQueryResult {
+  uint32_t tests = 0;     // plane tests made (= internal nodes on the path)
+  bool on_line = false;   // the eye lay exactly on a test-line (went to the back child; the order
+                          // is then only guaranteed where the BSP also counts the eye as behind)
+};
+
+// Appends the fragment ids for `eye` (at y = tree.height, (x, z) in the region) to `order`
+// (cleared first; no allocation once it has the capacity). Equal to backToFront(bsp, eye, order,
+// true) for such eyes not on any test-line.
+PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order);
+
+// The same walk, appending the runs to draw (ranges of tree.fragment_ids, in order) instead of
+// copying the ids: what a renderer that keeps per-fragment draw ranges needs.
+PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs);
+
+// Frame coherence: the path of the last query and where each node's list starts in `order`.
+// A query re-tests the path from the root and re-walks only from the first test whose side
+// changed, keeping the order before it.
+struct PfdCursor {
+  std::vector<uint32_t> path;        // node indices, root first
+  std::vector<uint32_t> order_size;  // order.size() before each path node's list
+  const PfdTree* tree = nullptr;
+};
+PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdCursor& cursor,
+                                std::vector<uint32_t>& order);
+
+// A uniformly random point of the region's pieces (by area), for tests and statistics.
+glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state);
+
+// Recomputes stats.tests_mean / tests_max over `eyes` random eyes (seeded) and stats.bytes.
+void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed);
+
+// ---- Levels, view cells and the tree file ----
+
+struct PfdLevelOptions {
+  PfdOptions tree;
+  // Per view cell: a tree over more than this many bytes is discarded and its cell cut into four
+  // (by the middle of the cell's region bounds), down to max_cell_depth. 0 = one cell per level.
+  uint64_t cell_memory = 64ull << 20;
+  uint32_t max_cell_depth = 8;
+  uint64_t max_memory = 1ull << 30;  // all trees of all levels together; exceeded: PfdBudgetError
+};
+
+struct PfdLevel {
+  uint32_t level = 0;     // index into Scene::levels
+  double floor_y = 0.0;
+  double height = 0.0;    // floor_y + eye height
+  std::vector<PfdTree> cells;  // disjoint view cells covering the level's walkable region
+};
+
+// One level's trees, cutting it into view cells where one tree exceeds cell_memory. `used_bytes`
+// counts towards options.max_memory across calls. `progress` (may be empty) gets one line per cell.
+PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
+                       const PfdLevelOptions& options, uint64_t& used_bytes,
+                       const std::function<void(const std::string&)>& progress = {});
+
+// The tree of the level's cell that holds (eye.x, eye.z), or null when none does (cells are
+// half-open boxes [lo, hi)).
+const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye);
+
+struct TreeFile {
+  BspTree bsp;
+  std::vector<PfdLevel> levels;
+  double eye_height = 0.0;
+};
+
+// One file with the BSP and every tree: magic, version, FNV-1a 64 checksum over the payload;
+// written to a temporary file next to `path` and renamed. SceneError naming the path on failure.
+void saveTreeFile(const TreeFile& file, const std::string& path);
+// SceneError naming the path for a missing file, wrong magic or version, checksum mismatch,
+// truncation or any index out of range; never allocates more than the file's size implies.
+TreeFile loadTreeFile(const std::string& path);
+TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::string& context);
+
+}  // namespace walkvis

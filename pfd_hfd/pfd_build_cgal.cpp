@@ -1,0 +1,730 @@
+// Building the PFD tree by partial evaluation of the BSP back-to-front traversal over regions of
+// the height plane (James & Day, "The priority face determination tree for hidden surface
+// removal", Computer Graphics Forum 17(1), 1998; definition and construction: DESIGN.md, "PFD
+// tree"). A region is a set of convex pieces with exact rational corners (CGAL's lazy exact
+// numbers): test-lines through corners happen (1–16% of decisions, DESIGN.md), and a corner that
+// lies on a line must count as touching it, not crossing it. A double filter with a forward error
+// bound decides almost every corner sign; only the rest are evaluated exactly.
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+
+#include "bsp/exact_sign.h"
+#include "pfd_hfd/pfd.h"
+
+namespace walkvis {
+namespace {
+
+using FT = CGAL::Exact_predicates_exact_constructions_kernel::FT;
+
+struct Corner {
+  FT x, z;
+  double ax = 0.0, az = 0.0;  // double approximations: |x − ax| <= rx, |z − az| <= rz
+  double rx = 0.0, rz = 0.0;
+  // Canonical ids of up to two lines the corner lies on exactly (it was made as their
+  // intersection): its sign against them is 0 without arithmetic. kNoLine where unknown.
+  uint32_t on[2] = {UINT32_MAX, UINT32_MAX};
+};
+constexpr uint32_t kNoLine = UINT32_MAX;
+
+struct Piece {
+  std::vector<Corner> corners;
+  std::vector<uint32_t> edge_line;  // canonical line of the edge corners[i] -> corners[i + 1], or kNoLine
+  double lox = 0.0, hix = 0.0, loz = 0.0, hiz = 0.0;  // contains every corner exactly
+};
+using Region = std::vector<Piece>;
+
+// The line a·x + b·z + c = 0 of the height plane; its sign at (x, z) is the sign of the plane
+// n·(x, h, z) − d, so that it agrees exactly with planeSide at the eye (x, h, z).
+struct Line {
+  double a = 0.0, b = 0.0;
+  double c = 0.0;     // double approximation of the exact c
+  double cmag = 0.0;  // bounds the magnitude of the terms that make c
+  FT ec;              // exact c
+  bool constant = false;  // a = b = 0: the sign is the sign of c everywhere
+  int constant_side = 0;
+  uint32_t canon = kNoLine;  // lines with the same plane (either orientation) share it
+  Plane plane;               // for the exact sign at a corner that is an exact double point
+  double h = 0.0;
+};
+
+Corner makeCorner(const FT& x, const FT& z) {
+  Corner k{x, z};
+  const auto ix = CGAL::to_interval(x);
+  const auto iz = CGAL::to_interval(z);
+  k.ax = 0.5 * (ix.first + ix.second);
+  k.az = 0.5 * (iz.first + iz.second);
+  // The radius of the interval around the midpoint, rounded up by a relative 1e-15 (the
+  // subtraction rounds at most half an ulp) plus the smallest subnormal.
+  k.rx = std::max(ix.second - k.ax, k.ax - ix.first) * (1.0 + 1e-15) + 5e-324;
+  k.rz = std::max(iz.second - k.az, k.az - iz.first) * (1.0 + 1e-15) + 5e-324;
+  if (ix.first == ix.second) k.rx = 0.0;
+  if (iz.first == iz.second) k.rz = 0.0;
+  return k;
+}
+
+void updateBox(Piece& p) {
+  p.lox = p.loz = HUGE_VAL;
+  p.hix = p.hiz = -HUGE_VAL;
+  for (const Corner& k : p.corners) {
+    p.lox = std::min(p.lox, k.ax - k.rx);
+    p.hix = std::max(p.hix, k.ax + k.rx);
+    p.loz = std::min(p.loz, k.az - k.rz);
+    p.hiz = std::max(p.hiz, k.az + k.rz);
+  }
+  // The box edges themselves were rounded: widen by a relative ulp.
+  auto widen = [](double& lo, double& hi) {
+    lo -= std::abs(lo) * 4.0 * DBL_EPSILON + 5e-324;
+    hi += std::abs(hi) * 4.0 * DBL_EPSILON + 5e-324;
+  };
+  widen(p.lox, p.hix);
+  widen(p.loz, p.hiz);
+}
+
+double pieceArea(const Piece& p) {
+  double s = 0.0;
+  const size_t n = p.corners.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Corner& u = p.corners[i];
+    const Corner& v = p.corners[(i + 1) % n];
+    s += u.ax * v.az - v.ax * u.az;
+  }
+  return 0.5 * std::abs(s);
+}
+
+Line planeLine(const Plane& plane, double h) {
+  Line l;
+  l.a = plane.n.x;
+  l.b = plane.n.z;
+  l.c = plane.n.y * h - plane.d;
+  l.cmag = std::abs(plane.n.y * h) + std::abs(plane.d);
+  l.ec = FT(plane.n.y) * FT(h) - FT(plane.d);
+  l.plane = plane;
+  l.h = h;
+  if (l.a == 0.0 && l.b == 0.0) {
+    l.constant = true;
+    // Exactly planeSide's answer at any eye of the height plane.
+    l.constant_side = exact::planeSign(0.0, plane.n.y, 0.0, plane.d, 0.0, h, 0.0);
+  }
+  return l;
+}
+
+// x·a + z·b + c for the box line a·x + b·z + c (cell boundaries: exact doubles).
+Line axisLine(double a, double b, double c) {
+  Line l;
+  l.a = a;
+  l.b = b;
+  l.c = c;
+  l.cmag = std::abs(c);
+  l.ec = FT(c);
+  l.plane.n = glm::dvec3(a, 0.0, b);  // exact: the sign of a·x + b·z + c with y's term 0
+  l.plane.d = -c;
+  return l;
+}
+
+struct Counters {
+  uint64_t exact_fallbacks = 0;
+  uint64_t touching = 0;
+  uint64_t decisions = 0;
+};
+
+int cornerSign(const Line& l, const Corner& k, Counters& counters) {
+  const double v = l.a * k.ax + l.b * k.az + l.c;
+  const double mag = std::abs(l.a * k.ax) + std::abs(l.b * k.az) + l.cmag;
+  // Rounding of the evaluation (5 operations: γ5·mag < 6e-16·mag, with c's own rounding), plus
+  // how far the corner's approximation may be from the corner.
+  const double bound = 16.0 * DBL_EPSILON * mag + (std::abs(l.a) * k.rx + std::abs(l.b) * k.rz) * (1.0 + 1e-14) + 1e-300;
+  if (v > bound) return 1;
+  if (v < -bound) return -1;
+  if (l.canon != kNoLine && (k.on[0] == l.canon || k.on[1] == l.canon)) return 0;
+  ++counters.exact_fallbacks;
+  // An input corner is an exact double point: the expansion arithmetic of exact_sign.h is exact
+  // there and much cheaper than the rational path.
+  if (k.rx == 0.0 && k.rz == 0.0)  // a point interval: the corner is exactly (ax, az)
+    return exact::planeSign(l.plane.n.x, l.plane.n.y, l.plane.n.z, l.plane.d, k.ax, l.h, k.az);
+  return CGAL::sign(FT(l.a) * k.x + FT(l.b) * k.z + l.ec);
+}
+
+constexpr int kCross = 2;
+
+// +1: the region lies in the line's positive side (corners >= 0, some > 0); -1: negative side;
+// 0: the line is constant zero (a horizontal plane through the height plane); kCross: corners
+// strictly on both sides.
+int classifyRegion(const Line& l, const Region& region, Counters& counters) {
+  if (l.constant) return l.constant_side;
+  bool pos = false, neg = false, touch = false;
+  for (const Piece& p : region) {
+    const double xmin = l.a > 0 ? p.lox : p.hix, xmax = l.a > 0 ? p.hix : p.lox;
+    const double zmin = l.b > 0 ? p.loz : p.hiz, zmax = l.b > 0 ? p.hiz : p.loz;
+    const double lo = l.a * xmin + l.b * zmin + l.c;
+    const double hi = l.a * xmax + l.b * zmax + l.c;
+    const double mag = std::abs(l.a) * std::max(std::abs(p.lox), std::abs(p.hix)) +
+                       std::abs(l.b) * std::max(std::abs(p.loz), std::abs(p.hiz)) + l.cmag;
+    const double bound = 16.0 * DBL_EPSILON * mag + 1e-300;  // rounding of the two evaluations
+    if (lo > bound) {
+      pos = true;
+    } else if (hi < -bound) {
+      neg = true;
+    } else {
+      for (const Corner& k : p.corners) {
+        const int s = cornerSign(l, k, counters);
+        pos |= s > 0;
+        neg |= s < 0;
+        touch |= s == 0;
+      }
+    }
+    if (pos && neg) {
+      ++counters.decisions;
+      return kCross;
+    }
+  }
+  ++counters.decisions;
+  if (touch) ++counters.touching;
+  return pos ? 1 : (neg ? -1 : 0);
+}
+
+// Splits a piece by a line: the part with corners >= 0 and the part with corners <= 0; a part
+// with no corner strictly on its side is dropped (it has no area).
+void clipPiece(const Piece& p, const Line& l, Counters& counters, Region* front, Region* back) {
+  const size_t n = p.corners.size();
+  std::vector<int> s(n);
+  bool pos = false, neg = false;
+  for (size_t i = 0; i < n; ++i) {
+    s[i] = cornerSign(l, p.corners[i], counters);
+    pos |= s[i] > 0;
+    neg |= s[i] < 0;
+  }
+  if (!neg) {
+    if (pos && front) front->push_back(p);
+    return;
+  }
+  if (!pos) {
+    if (back) back->push_back(p);
+    return;
+  }
+  // Sutherland–Hodgman for both sides. Per output corner: whether it lies on l, and the input
+  // edge that arrives at it, to carry the edges' line tags over.
+  Piece f, b;
+  std::vector<uint8_t> f_on, b_on;
+  std::vector<uint32_t> f_arrive, b_arrive;
+  for (size_t i = 0; i < n; ++i) {
+    const size_t j = (i + 1) % n;
+    const Corner& u = p.corners[i];
+    const Corner& v = p.corners[j];
+    const uint32_t arrive_u = static_cast<uint32_t>((i + n - 1) % n);
+    if (s[i] >= 0) {
+      f.corners.push_back(u);
+      f_on.push_back(s[i] == 0);
+      f_arrive.push_back(arrive_u);
+    }
+    if (s[i] <= 0) {
+      b.corners.push_back(u);
+      b_on.push_back(s[i] == 0);
+      b_arrive.push_back(arrive_u);
+    }
+    if (s[i] * s[j] < 0) {
+      const FT fu = FT(l.a) * u.x + FT(l.b) * u.z + l.ec;
+      const FT fv = FT(l.a) * v.x + FT(l.b) * v.z + l.ec;
+      const FT t = fu / (fu - fv);
+      Corner k = makeCorner(u.x + t * (v.x - u.x), u.z + t * (v.z - u.z));
+      k.on[0] = l.canon;
+      k.on[1] = p.edge_line[i];
+      f.corners.push_back(k);
+      b.corners.push_back(k);
+      f_on.push_back(1);
+      b_on.push_back(1);
+      f_arrive.push_back(static_cast<uint32_t>(i));
+      b_arrive.push_back(static_cast<uint32_t>(i));
+    }
+  }
+  auto edges = [&](Piece& q, const std::vector<uint8_t>& on, const std::vector<uint32_t>& arrive) {
+    const size_t m = q.corners.size();
+    q.edge_line.resize(m);
+    for (size_t k = 0; k < m; ++k) {
+      const size_t next = (k + 1) % m;
+      q.edge_line[k] = on[k] && on[next] ? l.canon : p.edge_line[arrive[next]];
+    }
+  };
+  edges(f, f_on, f_arrive);
+  edges(b, b_on, b_arrive);
+  updateBox(f);
+  updateBox(b);
+  if (front) front->push_back(std::move(f));
+  if (back) back->push_back(std::move(b));
+}
+
+void clipRegion(const Region& r, const Line& l, Counters& counters, Region* front, Region* back) {
+  for (const Piece& p : r) clipPiece(p, l, counters, front, back);
+}
+
+// Area of the region on the positive side of the line, in doubles (a heuristic only).
+double positiveArea(const Region& r, const Line& l) {
+  double total = 0.0;
+  std::vector<double> xs, zs;
+  for (const Piece& p : r) {
+    xs.clear();
+    zs.clear();
+    const size_t n = p.corners.size();
+    for (size_t i = 0; i < n; ++i) {
+      const Corner& u = p.corners[i];
+      const Corner& v = p.corners[(i + 1) % n];
+      const double fu = l.a * u.ax + l.b * u.az + l.c;
+      const double fv = l.a * v.ax + l.b * v.az + l.c;
+      if (fu >= 0) {
+        xs.push_back(u.ax);
+        zs.push_back(u.az);
+      }
+      if ((fu > 0 && fv < 0) || (fu < 0 && fv > 0)) {
+        const double t = fu / (fu - fv);
+        xs.push_back(u.ax + t * (v.ax - u.ax));
+        zs.push_back(u.az + t * (v.az - u.az));
+      }
+    }
+    double s = 0.0;
+    for (size_t i = 0; i < xs.size(); ++i) {
+      const size_t j = (i + 1) % xs.size();
+      s += xs[i] * zs[j] - xs[j] * zs[i];
+    }
+    total += 0.5 * std::abs(s);
+  }
+  return total;
+}
+
+uint64_t hashRun(const uint32_t* ids, size_t n) {
+  uint64_t h = 1469598103934665603ull ^ n;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= ids[i];
+    h *= 1099511628211ull;
+    h ^= h >> 29;
+  }
+  return h;
+}
+
+// A pending step of the back-to-front traversal.
+struct Item {
+  int32_t node = -1;
+  int8_t emit_side = 0;  // 0: visit the subtree at `node`; ±1 or 2 (eye on the plane): emit its fragments
+};
+constexpr int8_t kEmitOn = 2;
+
+class Builder {
+ public:
+  Builder(const BspTree& bsp, double height, const PfdOptions& options, PfdTree& out)
+      : bsp_(bsp), options_(options), out_(out) {
+    const size_t nn = bsp.nodes.size();
+    lines_.reserve(nn);
+    for (const BspNode& node : bsp.nodes) lines_.push_back(planeLine(node.plane, height));
+    frag_line_.assign(bsp.fragments.size(), UINT32_MAX);
+    for (size_t f = 0; f < bsp.fragments.size(); ++f) {
+      if (bsp.fragment_orientation[f] == 0) {
+        frag_line_[f] = static_cast<uint32_t>(lines_.size());
+        lines_.push_back(planeLine(bsp.fragments[f].plane, height));
+      }
+    }
+    // Identical planes (either orientation) give the same line: one canonical id.
+    std::unordered_map<uint64_t, std::vector<uint32_t>> by_hash;
+    for (uint32_t id = 0; id < lines_.size(); ++id) {
+      Plane q = lines_[id].plane;
+      if (q.n.x < 0 || (q.n.x == 0 && q.n.z < 0)) {
+        q.n = -q.n;
+        q.d = -q.d;
+      }
+      const double key[4] = {q.n.x, q.n.y, q.n.z, q.d};
+      uint64_t hsh = 1469598103934665603ull;
+      for (double kv : key) {
+        uint64_t bits;
+        std::memcpy(&bits, &kv, sizeof bits);
+        hsh = (hsh ^ bits) * 1099511628211ull;
+      }
+      auto& bucket = by_hash[hsh];
+      uint32_t canon = id;
+      for (uint32_t other : bucket) {
+        Plane o = lines_[other].plane;
+        if (o.n.x < 0 || (o.n.x == 0 && o.n.z < 0)) {
+          o.n = -o.n;
+          o.d = -o.d;
+        }
+        if (o.n == q.n && o.d == q.d) {
+          canon = lines_[other].canon;
+          break;
+        }
+      }
+      if (canon == id) bucket.push_back(id);
+      lines_[id].canon = canon;
+    }
+    side_.assign(lines_.size(), kUnknown);
+    cross_stamp_.assign(lines_.size(), 0);
+    unresolved_stamp_.assign(nn, 0);
+    test_plane_.assign(lines_.size(), UINT32_MAX);
+  }
+
+  void run(Region region) {
+    std::vector<Item> stack;
+    if (bsp_.root >= 0) stack.push_back({bsp_.root, 0});
+    build(std::move(region), std::move(stack), 1);
+  }
+
+  Counters counters;
+  std::vector<double> leaf_areas;
+  uint64_t depth_max = 0;
+  uint64_t list_fragments = 0;
+
+ private:
+  static constexpr int8_t kUnknown = 5;
+
+  const Plane& linePlane(uint32_t id) const {
+    if (id < bsp_.nodes.size()) return bsp_.nodes[id].plane;
+    // A fragment plane: find the fragment (rare: degenerate fragments only).
+    for (size_t f = 0; f < frag_line_.size(); ++f)
+      if (frag_line_[f] == id) return bsp_.fragments[f].plane;
+    return bsp_.nodes[0].plane;  // unreachable
+  }
+
+  int side(uint32_t id, const Region& r) {
+    if (side_[id] != kUnknown) return side_[id];
+    if (cross_stamp_[id] == region_id_) return kCross;
+    const int s = classifyRegion(lines_[id], r, counters);
+    if (s == kCross) {
+      cross_stamp_[id] = region_id_;
+    } else {
+      side_[id] = static_cast<int8_t>(s);
+      log_.push_back(id);
+    }
+    return s;
+  }
+
+  void undo(size_t mark) {
+    while (log_.size() > mark) {
+      side_[log_.back()] = kUnknown;
+      log_.pop_back();
+    }
+  }
+
+  // The crossing line (if any) among the orientation-0 fragments of a node; UINT32_MAX if none.
+  uint32_t crossingFragmentLine(const BspNode& node, const Region& r) {
+    for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f)
+      if (frag_line_[f] != UINT32_MAX && side(frag_line_[f], r) == kCross) return frag_line_[f];
+    return UINT32_MAX;
+  }
+
+  // Front-facing fragments of a node whose plane side (and degenerate fragments' sides) are known.
+  void emitFragments(const BspNode& node, int s, const Region& r, std::vector<uint32_t>& out) {
+    for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) {
+      const int8_t o = bsp_.fragment_orientation[f];
+      const int fs = o != 0 ? s * o : side(frag_line_[f], r);
+      if (fs > 0) out.push_back(f);
+    }
+  }
+
+  static void children(const BspNode& node, int s, int32_t& far_child, int32_t& near_child) {
+    // As backToFront: the eye on the plane takes the same order as in front.
+    far_child = s >= 0 ? node.back : node.front;
+    near_child = s >= 0 ? node.front : node.back;
+  }
+
+  // Appends the whole back-to-front emission of a subtree, or returns false (and marks the path
+  // to the first undecided line as unresolved for this region).
+  bool resolve(int32_t id, const Region& r, std::vector<uint32_t>& out) {
+    if (id < 0) return true;
+    if (unresolved_stamp_[id] == region_id_) return false;
+    const BspNode& node = bsp_.nodes[id];
+    const int s = side(static_cast<uint32_t>(id), r);
+    bool ok = s != kCross;
+    if (ok) {
+      int32_t far_child, near_child;
+      children(node, s, far_child, near_child);
+      ok = resolve(far_child, r, out) && crossingFragmentLine(node, r) == UINT32_MAX;
+      if (ok) {
+        emitFragments(node, s, r, out);
+        ok = resolve(near_child, r, out);
+      }
+    }
+    if (!ok) unresolved_stamp_[id] = region_id_;
+    return ok;
+  }
+
+  void addRun(const std::vector<uint32_t>& ids) {
+    if (ids.empty()) return;
+    list_fragments += ids.size();
+    uint32_t run_id = UINT32_MAX;
+    if (options_.dedup) {
+      const uint64_t h = hashRun(ids.data(), ids.size());
+      auto [lo, hi] = run_index_.equal_range(h);
+      for (auto it = lo; it != hi; ++it) {
+        const PfdRun& run = out_.runs[it->second];
+        if (run.count == ids.size() &&
+            std::equal(ids.begin(), ids.end(), out_.fragment_ids.begin() + run.first)) {
+          run_id = it->second;
+          break;
+        }
+      }
+      if (run_id == UINT32_MAX) {
+        run_id = newRun(ids);
+        run_index_.emplace(h, run_id);
+      }
+    } else {
+      run_id = newRun(ids);
+    }
+    out_.run_refs.push_back(run_id);
+  }
+
+  uint32_t newRun(const std::vector<uint32_t>& ids) {
+    const uint32_t id = static_cast<uint32_t>(out_.runs.size());
+    out_.runs.push_back({static_cast<uint32_t>(out_.fragment_ids.size()), static_cast<uint32_t>(ids.size())});
+    out_.fragment_ids.insert(out_.fragment_ids.end(), ids.begin(), ids.end());
+    return id;
+  }
+
+  uint64_t bytesNow() const {
+    // Arrays at their sizes, the dedup index at about 48 bytes a run (node + bucket), the undo
+    // log and scratch are small beside them.
+    return out_.nodes.size() * sizeof(PfdNode) + out_.run_refs.size() * sizeof(uint32_t) +
+           out_.runs.size() * (sizeof(PfdRun) + (options_.dedup ? 48 : 0)) +
+           out_.fragment_ids.size() * sizeof(uint32_t) + out_.planes.size() * sizeof(Plane);
+  }
+
+  void checkBudget() const {
+    if (options_.max_memory == 0) return;
+    const uint64_t bytes = bytesNow();
+    if (bytes > options_.max_memory)
+      throw PfdBudgetError("pfd: tree needs more than its memory budget of " + std::to_string(options_.max_memory) +
+                           " bytes (" + std::to_string(out_.nodes.size()) + " nodes, " +
+                           std::to_string(out_.fragment_ids.size() + out_.run_refs.size()) +
+                           " list entries so far); raise --max-memory or use smaller view cells");
+  }
+
+  // Undecided lines ahead in the traversal (the first crossing line first), for the heuristic.
+  std::vector<uint32_t> candidates(uint32_t first, const std::vector<Item>& stack, const Region& r) {
+    std::vector<uint32_t> result{first};
+    if (options_.heuristic == PfdHeuristic::kTraversal || options_.candidates <= 1) return result;
+    std::vector<int32_t> queue;
+    size_t examined = 0;
+    const size_t max_examined = 8 * static_cast<size_t>(options_.candidates);
+    for (size_t k = stack.size(); k-- > 0 && result.size() < options_.candidates && examined < max_examined;) {
+      if (stack[k].emit_side != 0) continue;
+      queue.assign(1, stack[k].node);
+      for (size_t q = 0; q < queue.size() && result.size() < options_.candidates && examined < max_examined; ++q) {
+        const int32_t id = queue[q];
+        if (id < 0) continue;
+        ++examined;
+        const int s = side(static_cast<uint32_t>(id), r);
+        if (s == kCross) {
+          if (static_cast<uint32_t>(id) != first) result.push_back(static_cast<uint32_t>(id));
+          continue;  // what lies beyond it is only reached after it is decided
+        }
+        queue.push_back(bsp_.nodes[id].front);
+        queue.push_back(bsp_.nodes[id].back);
+      }
+    }
+    return result;
+  }
+
+  uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r) {
+    const std::vector<uint32_t> cands = candidates(first, stack, r);
+    if (cands.size() == 1) return first;
+    double total = 0.0;
+    for (const Piece& p : r) total += pieceArea(p);
+    uint32_t best = first;
+    double best_score = -1.0;
+    for (uint32_t id : cands) {
+      const double a = positiveArea(r, lines_[id]);
+      const double score = std::min(a, total - a);
+      if (score > best_score) {
+        best_score = score;
+        best = id;
+      }
+    }
+    return best;
+  }
+
+  uint32_t testPlaneIndex(uint32_t line) {
+    if (test_plane_[line] == UINT32_MAX) {
+      test_plane_[line] = static_cast<uint32_t>(out_.planes.size());
+      out_.planes.push_back(linePlane(line));
+    }
+    return test_plane_[line];
+  }
+
+  // Builds the node for region r with the traversal continuing from `stack`; returns its index.
+  int32_t build(Region r, std::vector<Item> stack, uint64_t depth) {
+    const int32_t index = static_cast<int32_t>(out_.nodes.size());
+    out_.nodes.push_back({});
+    region_id_ = ++region_counter_;
+    depth_max = std::max(depth_max, depth);
+    const uint32_t first_ref = static_cast<uint32_t>(out_.run_refs.size());
+    uint32_t crossing = UINT32_MAX;
+    while (!stack.empty()) {
+      const Item item = stack.back();
+      const BspNode& node = bsp_.nodes[item.node];
+      if (item.emit_side == 0) {
+        const int s = side(static_cast<uint32_t>(item.node), r);
+        if (s == kCross) {
+          crossing = static_cast<uint32_t>(item.node);
+          break;
+        }
+        if (options_.dedup && unresolved_stamp_[item.node] != region_id_) {
+          scratch_.clear();
+          if (resolve(item.node, r, scratch_)) {
+            stack.pop_back();
+            addRun(scratch_);
+            continue;
+          }
+        }
+        stack.pop_back();
+        int32_t far_child, near_child;
+        children(node, s, far_child, near_child);
+        if (near_child >= 0) stack.push_back({near_child, 0});
+        stack.push_back({item.node, static_cast<int8_t>(s == 0 ? kEmitOn : s)});
+        if (far_child >= 0) stack.push_back({far_child, 0});
+      } else {
+        const uint32_t fl = crossingFragmentLine(node, r);
+        if (fl != UINT32_MAX) {
+          crossing = fl;
+          break;
+        }
+        stack.pop_back();
+        scratch_.clear();
+        emitFragments(node, item.emit_side == kEmitOn ? 0 : item.emit_side, r, scratch_);
+        addRun(scratch_);
+      }
+    }
+    out_.nodes[index].first_ref = first_ref;
+    out_.nodes[index].ref_count = static_cast<uint32_t>(out_.run_refs.size()) - first_ref;
+    checkBudget();
+    if (crossing == UINT32_MAX) {
+      double area = 0.0;
+      for (const Piece& p : r) area += pieceArea(p);
+      leaf_areas.push_back(area);
+      return index;
+    }
+    const uint32_t line = chooseLine(crossing, stack, r);
+    Region front, back;
+    clipRegion(r, lines_[line], counters, &front, &back);
+    r.clear();
+    r.shrink_to_fit();
+    const size_t mark = log_.size();
+    side_[line] = 1;
+    log_.push_back(line);
+    const int32_t f = build(std::move(front), stack, depth + 1);
+    undo(mark);
+    side_[line] = -1;
+    log_.push_back(line);
+    const int32_t b = build(std::move(back), std::move(stack), depth + 1);
+    undo(mark);
+    out_.nodes[index].plane = testPlaneIndex(line);
+    out_.nodes[index].front = f;
+    out_.nodes[index].back = b;
+    return index;
+  }
+
+  const BspTree& bsp_;
+  const PfdOptions& options_;
+  PfdTree& out_;
+  std::vector<Line> lines_;         // BSP node planes [0, nodes), then degenerate fragment planes
+  std::vector<uint32_t> frag_line_;  // per fragment: its own line when its orientation is 0
+  std::vector<int8_t> side_;         // decided side for the current region (and its ancestors)
+  std::vector<uint32_t> log_;        // lines decided, in order, to undo on the way back up
+  std::vector<uint32_t> cross_stamp_;       // == region_id_: crosses the current region
+  std::vector<uint32_t> unresolved_stamp_;  // == region_id_: subtree not resolved in the current region
+  std::vector<uint32_t> test_plane_;
+  std::vector<uint32_t> scratch_;
+  std::unordered_multimap<uint64_t, uint32_t> run_index_;
+  uint32_t region_id_ = 0, region_counter_ = 0;
+};
+
+bool finite2(const glm::dvec2& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
+
+}  // namespace
+
+PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
+                 const std::optional<PfdBox>& cell, const PfdOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
+  if (cell && !(finite2(cell->lo) && finite2(cell->hi) && cell->lo.x < cell->hi.x && cell->lo.y < cell->hi.y))
+    throw SceneError("pfd: view cell is not a finite box with lo < hi");
+  PfdTree tree;
+  tree.height = height;
+  tree.cell = cell;
+
+  Counters counters;
+  Region region;
+  for (const auto& ring : walkable) {
+    Piece p;
+    for (const glm::dvec2& v : ring) {
+      if (!finite2(v)) throw SceneError("pfd: walkable region has a non-finite corner");
+      // Consecutive duplicates would make zero-length edges: skip them.
+      if (!p.corners.empty() && p.corners.back().ax == v.x && p.corners.back().az == v.y) continue;
+      p.corners.push_back(makeCorner(FT(v.x), FT(v.y)));
+    }
+    while (p.corners.size() > 1 && p.corners.front().ax == p.corners.back().ax &&
+           p.corners.front().az == p.corners.back().az)
+      p.corners.pop_back();
+    if (p.corners.size() < 3) continue;
+    // Exactly zero area (all corners on one line): no eye can stand there.
+    bool flat = true;
+    for (size_t i = 2; i < p.corners.size() && flat; ++i) {
+      const FT cross = (p.corners[1].x - p.corners[0].x) * (p.corners[i].z - p.corners[0].z) -
+                       (p.corners[1].z - p.corners[0].z) * (p.corners[i].x - p.corners[0].x);
+      flat = CGAL::is_zero(cross);
+    }
+    if (flat) continue;
+    p.edge_line.assign(p.corners.size(), kNoLine);
+    updateBox(p);
+    region.push_back(std::move(p));
+  }
+  if (cell) {
+    // Half-open boxes: x >= lo.x, x <= hi.x, ... (the boundary has no area, either is right).
+    const Line edges[4] = {axisLine(1, 0, -cell->lo.x), axisLine(-1, 0, cell->hi.x), axisLine(0, 1, -cell->lo.y),
+                           axisLine(0, -1, cell->hi.y)};
+    for (const Line& l : edges) {
+      Region clipped;
+      clipRegion(region, l, counters, &clipped, nullptr);
+      region = std::move(clipped);
+    }
+  }
+  for (const Piece& p : region) {
+    std::vector<glm::dvec2> ring;
+    for (const Corner& k : p.corners) ring.emplace_back(k.ax, k.az);
+    tree.region.push_back(std::move(ring));
+    tree.stats.region_area += pieceArea(p);
+  }
+
+  Builder builder(bsp, height, options, tree);
+  builder.run(std::move(region));
+
+  PfdStats& s = tree.stats;
+  s.fragments = bsp.fragments.size();
+  s.nodes = tree.nodes.size();
+  s.leaves = builder.leaf_areas.size();
+  s.depth_max = builder.depth_max - 1;
+  s.list_entries = tree.run_refs.size();
+  s.list_fragments = builder.list_fragments;
+  s.pool_entries = tree.fragment_ids.size();
+  s.runs = tree.runs.size();
+  s.test_planes = tree.planes.size();
+  s.exact_fallbacks = counters.exact_fallbacks + builder.counters.exact_fallbacks;
+  s.touching = builder.counters.touching;
+  s.decisions = builder.counters.decisions;
+  double entropy = 0.0;
+  if (s.region_area > 0.0) {
+    for (double a : builder.leaf_areas) {
+      const double frac = a / s.region_area;
+      if (frac > 0.0) entropy -= frac * std::log2(frac);
+    }
+  }
+  s.tests_entropy_bound = entropy;
+  tree.nodes.shrink_to_fit();
+  tree.run_refs.shrink_to_fit();
+  tree.runs.shrink_to_fit();
+  tree.fragment_ids.shrink_to_fit();
+  s.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  measurePfd(tree, options.stat_eyes, options.seed);
+  return tree;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,305 @@
+// Tree files: the BSP and every PFD tree of every level in one versioned, checksummed file,
+// written atomically (temporary file next to the target, then rename).
+//
+// Layout (little-endian, fields one by one, no padding):
+//   header  : magic "WVPFD\r\n\x1a" (8), u32 version, u32 0, u64 payload bytes, u64 FNV-1a 64 of the payload
+//   payload : f64 eye_height, u64 BSP bytes + the BSP file (saveBsp's format, checked by loadBspFromMemory),
+//             u32 levels; per level: u32 level, f64 floor_y, f64 height, u32 cells; per cell (tree):
+//             f64 height, u8 has_cell, 4 f64 cell box, u32 pieces (u32 corners, 2 f64 each),
+//             u32 planes (4 f64), u32 nodes (u32 plane, i32 front, i32 back, u32 first_ref, u32 ref_count),
+//             u32 run_refs (u32), u32 runs (2 u32), u32 fragment_ids (u32), stats (13 u64, 5 f64).
+// Loading checks everything a query relies on: children after their parent, plane, run and
+// fragment indices in range, so that a loaded tree is queried without further checks.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "pfd_hfd/pfd.h"
+#include "scenes/loaders.h"
+
+namespace walkvis {
+namespace {
+
+constexpr char kMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
+constexpr uint32_t kVersion = 1;
+constexpr size_t kHeaderBytes = 32;
+
+uint64_t fnv1a(const uint8_t* data, size_t size) {
+  uint64_t h = 1469598103934665603ull;
+  for (size_t i = 0; i < size; ++i) {
+    h ^= data[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+struct Writer {
+  std::vector<uint8_t> bytes;
+  template <class T>
+  void put(T v) {
+    const size_t at = bytes.size();
+    bytes.resize(at + sizeof(T));
+    std::memcpy(bytes.data() + at, &v, sizeof(T));
+  }
+  void putPlane(const Plane& p) {
+    put(p.n.x);
+    put(p.n.y);
+    put(p.n.z);
+    put(p.d);
+  }
+};
+
+struct Reader {
+  std::span<const uint8_t> bytes;
+  size_t pos = 0;
+  const std::string& context;
+  [[noreturn]] void fail(const std::string& what) const { throw SceneError(context + ": " + what); }
+  template <class T>
+  T get() {
+    if (bytes.size() - pos < sizeof(T)) fail("truncated tree file");
+    T v;
+    std::memcpy(&v, bytes.data() + pos, sizeof(T));
+    pos += sizeof(T);
+    return v;
+  }
+  double getFinite() {
+    const double v = get<double>();
+    if (!std::isfinite(v)) fail("non-finite number in tree file");
+    return v;
+  }
+  // A count of elements of `element_bytes` each that must fit in what is left.
+  uint32_t count(size_t element_bytes) {
+    const uint32_t n = get<uint32_t>();
+    if (static_cast<uint64_t>(n) * element_bytes > bytes.size() - pos) fail("truncated tree file (count too large)");
+    return n;
+  }
+};
+
+void writeTree(Writer& w, const PfdTree& t) {
+  w.put(t.height);
+  w.put<uint8_t>(t.cell ? 1 : 0);
+  const PfdBox box = t.cell.value_or(PfdBox{});
+  w.put(box.lo.x);
+  w.put(box.lo.y);
+  w.put(box.hi.x);
+  w.put(box.hi.y);
+  w.put(static_cast<uint32_t>(t.region.size()));
+  for (const auto& ring : t.region) {
+    w.put(static_cast<uint32_t>(ring.size()));
+    for (const glm::dvec2& p : ring) {
+      w.put(p.x);
+      w.put(p.y);
+    }
+  }
+  w.put(static_cast<uint32_t>(t.planes.size()));
+  for (const Plane& p : t.planes) w.putPlane(p);
+  w.put(static_cast<uint32_t>(t.nodes.size()));
+  for (const PfdNode& n : t.nodes) {
+    w.put(n.plane);
+    w.put(n.front);
+    w.put(n.back);
+    w.put(n.first_ref);
+    w.put(n.ref_count);
+  }
+  w.put(static_cast<uint32_t>(t.run_refs.size()));
+  for (uint32_t r : t.run_refs) w.put(r);
+  w.put(static_cast<uint32_t>(t.runs.size()));
+  for (const PfdRun& r : t.runs) {
+    w.put(r.first);
+    w.put(r.count);
+  }
+  w.put(static_cast<uint32_t>(t.fragment_ids.size()));
+  for (uint32_t f : t.fragment_ids) w.put(f);
+  const PfdStats& s = t.stats;
+  for (uint64_t v : {s.fragments, s.nodes, s.leaves, s.depth_max, s.list_entries, s.list_fragments, s.pool_entries,
+                     s.runs, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max})
+    w.put(v);
+  for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, 0.0}) w.put(v);
+}
+
+PfdTree readTree(Reader& r, size_t fragments) {
+  PfdTree t;
+  t.height = r.getFinite();
+  const uint8_t has_cell = r.get<uint8_t>();
+  if (has_cell > 1) r.fail("bad view cell flag");
+  PfdBox box;
+  box.lo.x = r.getFinite();
+  box.lo.y = r.getFinite();
+  box.hi.x = r.getFinite();
+  box.hi.y = r.getFinite();
+  if (has_cell) t.cell = box;
+  const uint32_t pieces = r.count(4);
+  t.region.resize(pieces);
+  for (auto& ring : t.region) {
+    const uint32_t n = r.count(16);
+    ring.resize(n);
+    for (glm::dvec2& p : ring) {
+      p.x = r.getFinite();
+      p.y = r.getFinite();
+    }
+  }
+  const uint32_t planes = r.count(32);
+  t.planes.resize(planes);
+  for (Plane& p : t.planes) {
+    p.n.x = r.getFinite();
+    p.n.y = r.getFinite();
+    p.n.z = r.getFinite();
+    p.d = r.getFinite();
+  }
+  const uint32_t nodes = r.count(20);
+  if (nodes == 0) r.fail("PFD tree without nodes");
+  t.nodes.resize(nodes);
+  for (PfdNode& n : t.nodes) {
+    n.plane = r.get<uint32_t>();
+    n.front = r.get<int32_t>();
+    n.back = r.get<int32_t>();
+    n.first_ref = r.get<uint32_t>();
+    n.ref_count = r.get<uint32_t>();
+  }
+  const uint32_t refs = r.count(4);
+  t.run_refs.resize(refs);
+  for (uint32_t& x : t.run_refs) x = r.get<uint32_t>();
+  const uint32_t runs = r.count(8);
+  t.runs.resize(runs);
+  for (PfdRun& x : t.runs) {
+    x.first = r.get<uint32_t>();
+    x.count = r.get<uint32_t>();
+  }
+  const uint32_t ids = r.count(4);
+  t.fragment_ids.resize(ids);
+  for (uint32_t& x : t.fragment_ids) x = r.get<uint32_t>();
+  PfdStats& s = t.stats;
+  for (uint64_t* v : {&s.fragments, &s.nodes, &s.leaves, &s.depth_max, &s.list_entries, &s.list_fragments,
+                      &s.pool_entries, &s.runs, &s.test_planes, &s.exact_fallbacks, &s.touching, &s.decisions,
+                      &s.tests_max})
+    *v = r.get<uint64_t>();
+  double unused = 0.0;
+  for (double* v : {&s.tests_mean, &s.tests_entropy_bound, &s.region_area, &s.build_seconds, &unused})
+    *v = r.getFinite();
+
+  // What a query relies on.
+  for (uint32_t i = 0; i < nodes; ++i) {
+    const PfdNode& n = t.nodes[i];
+    const bool leaf = n.front < 0;
+    if (leaf != (n.back < 0) || (leaf && (n.front != -1 || n.back != -1)))
+      r.fail("PFD node " + std::to_string(i) + " has one child");
+    if (!leaf) {
+      if (static_cast<uint32_t>(n.front) <= i || static_cast<uint32_t>(n.front) >= nodes ||
+          static_cast<uint32_t>(n.back) <= i || static_cast<uint32_t>(n.back) >= nodes)
+        r.fail("PFD node " + std::to_string(i) + " has a child out of range");
+      if (n.plane >= planes) r.fail("PFD node " + std::to_string(i) + " has a plane out of range");
+    }
+    if (static_cast<uint64_t>(n.first_ref) + n.ref_count > refs)
+      r.fail("PFD node " + std::to_string(i) + " has a list out of range");
+  }
+  for (uint32_t x : t.run_refs)
+    if (x >= runs) r.fail("PFD run reference out of range");
+  for (const PfdRun& x : t.runs)
+    if (static_cast<uint64_t>(x.first) + x.count > ids) r.fail("PFD run out of range");
+  for (uint32_t x : t.fragment_ids)
+    if (x >= fragments) r.fail("PFD fragment id out of range");
+  measurePfd(t, 0, 0);  // bytes
+  return t;
+}
+
+}  // namespace
+
+void saveTreeFile(const TreeFile& file, const std::string& path) {
+  namespace fs = std::filesystem;
+  // The BSP part in saveBsp's own format, through a temporary file.
+  const std::string bsp_tmp = path + ".bsp.tmp";
+  saveBsp(file.bsp, bsp_tmp);
+  std::vector<uint8_t> bsp_bytes;
+  try {
+    bsp_bytes = readFileBytes(bsp_tmp);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(bsp_tmp, ec);
+    throw;
+  }
+  std::error_code ec;
+  fs::remove(bsp_tmp, ec);
+
+  Writer w;
+  w.put(file.eye_height);
+  w.put(static_cast<uint64_t>(bsp_bytes.size()));
+  w.bytes.insert(w.bytes.end(), bsp_bytes.begin(), bsp_bytes.end());
+  w.put(static_cast<uint32_t>(file.levels.size()));
+  for (const PfdLevel& l : file.levels) {
+    w.put(l.level);
+    w.put(l.floor_y);
+    w.put(l.height);
+    w.put(static_cast<uint32_t>(l.cells.size()));
+    for (const PfdTree& t : l.cells) writeTree(w, t);
+  }
+  Writer h;
+  h.bytes.assign(kMagic, kMagic + 8);
+  h.put(kVersion);
+  h.put<uint32_t>(0);
+  h.put(static_cast<uint64_t>(w.bytes.size()));
+  h.put(fnv1a(w.bytes.data(), w.bytes.size()));
+
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(h.bytes.data()), static_cast<std::streamsize>(h.bytes.size()));
+    out.write(reinterpret_cast<const char*>(w.bytes.data()), static_cast<std::streamsize>(w.bytes.size()));
+    out.flush();
+    if (!out) {
+      fs::remove(tmp, ec);
+      throw SceneError(path + ": cannot write tree file");
+    }
+  }
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw SceneError(path + ": cannot write tree file (rename failed)");
+  }
+}
+
+TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::string& context) {
+  if (bytes.size() < kHeaderBytes) throw SceneError(context + ": truncated tree file (no header)");
+  if (std::memcmp(bytes.data(), kMagic, 8) != 0) throw SceneError(context + ": not a walkvis tree file (bad magic)");
+  Reader hr{bytes, 8, context};
+  const uint32_t version = hr.get<uint32_t>();
+  if (version != kVersion)
+    throw SceneError(context + ": tree file version " + std::to_string(version) + ", expected " +
+                     std::to_string(kVersion));
+  if (hr.get<uint32_t>() != 0) throw SceneError(context + ": bad tree file header");
+  const uint64_t size = hr.get<uint64_t>();
+  const uint64_t checksum = hr.get<uint64_t>();
+  if (size != bytes.size() - kHeaderBytes)
+    throw SceneError(context + ": truncated tree file (" + std::to_string(bytes.size() - kHeaderBytes) +
+                     " payload bytes, header says " + std::to_string(size) + ")");
+  const std::span<const uint8_t> payload = bytes.subspan(kHeaderBytes);
+  if (fnv1a(payload.data(), payload.size()) != checksum) throw SceneError(context + ": tree file checksum mismatch");
+
+  Reader r{payload, 0, context};
+  TreeFile file;
+  file.eye_height = r.getFinite();
+  const uint64_t bsp_size = r.get<uint64_t>();
+  if (bsp_size > payload.size() - r.pos) r.fail("truncated tree file (BSP part)");
+  file.bsp = loadBspFromMemory(payload.subspan(r.pos, bsp_size), context + " (BSP part)");
+  r.pos += bsp_size;
+  const uint32_t levels = r.count(24);
+  file.levels.resize(levels);
+  for (PfdLevel& l : file.levels) {
+    l.level = r.get<uint32_t>();
+    l.floor_y = r.getFinite();
+    l.height = r.getFinite();
+    const uint32_t cells = r.count(64);
+    l.cells.reserve(cells);
+    for (uint32_t c = 0; c < cells; ++c) l.cells.push_back(readTree(r, file.bsp.fragments.size()));
+  }
+  if (r.pos != payload.size()) r.fail("trailing bytes in tree file");
+  return file;
+}
+
+TreeFile loadTreeFile(const std::string& path) {
+  const std::vector<uint8_t> bytes = readFileBytes(path);
+  return loadTreeFileFromMemory(bytes, path);
+}
+
+}  // namespace walkvis

@@ -1,0 +1,314 @@
+// PFD tree: the order for every eye of the height plane equals the BSP back-to-front order with
+// back faces skipped (property tests over fixed seeds), the query's costs, and the tree file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "bsp/bsp.h"
+#include "pfd_hfd/pfd.h"
+#include "scenes/generators.h"
+#include "scenes/scene.h"
+
+namespace walkvis {
+namespace {
+
+// A building-like scene: a floor, vertical walls (random orientation and facing, some slanted in
+// plan), a ramp, and a horizontal slab exactly in the height plane.
+Scene randomBuilding(uint64_t seed, int walls, double eye_height) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> coord(0.0, 20.0);
+  std::uniform_int_distribution<int> grid(0, 20);
+  Scene scene;
+  scene.name = "random-building-" + std::to_string(seed);
+  scene.eye_height = eye_height;
+  const std::string ctx = scene.name;
+  auto quad = [&](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, glm::dvec3 d) {
+    const glm::dvec3 v[4] = {a, b, c, d};
+    addFace(scene, v, 0x808080, ctx);
+  };
+  quad({0, 0, 0}, {0, 0, 20}, {20, 0, 20}, {20, 0, 0});  // floor, facing up
+  for (int i = 0; i < walls; ++i) {
+    glm::dvec2 p, q;
+    if (i % 2 == 0) {
+      // Axis-aligned on a grid: many walls share planes and lines pass through corners.
+      p = {grid(rng), grid(rng)};
+      q = (rng() & 1) ? glm::dvec2{p.x, static_cast<double>(grid(rng))} : glm::dvec2{static_cast<double>(grid(rng)), p.y};
+    } else {
+      p = {coord(rng), coord(rng)};
+      q = {coord(rng), coord(rng)};
+    }
+    if (p == q) continue;
+    const double top = 2.0 + (rng() % 3);
+    if (rng() & 1) std::swap(p, q);
+    quad({p.x, 0, p.y}, {q.x, 0, q.y}, {q.x, top, q.y}, {p.x, top, p.y});
+  }
+  // A ramp (neither vertical nor horizontal) and a slab lying exactly in the height plane.
+  quad({2, 0, 2}, {2, 0, 5}, {6, 1.5, 5}, {6, 1.5, 2});
+  quad({12, eye_height, 12}, {12, eye_height, 15}, {15, eye_height, 15}, {15, eye_height, 12});
+  FloorLevel level;
+  level.floor_y = 0.0;
+  // Several pieces, one with a corner on a grid line.
+  level.walkable = {{{0, 0}, {10, 0}, {10, 20}, {0, 20}}, {{10, 0}, {20, 0}, {20, 10}}, {{10, 0}, {20, 10}, {20, 20}, {10, 20}}};
+  level.walkable_area = 400.0;
+  scene.levels.push_back(level);
+  return scene;
+}
+
+bool onSomeVerticalPlane(const BspTree& bsp, const glm::dvec3& eye) {
+  for (const BspNode& n : bsp.nodes)
+    if ((n.plane.n.x != 0.0 || n.plane.n.z != 0.0) && planeSide(n.plane, eye) == 0) return true;
+  for (size_t f = 0; f < bsp.fragments.size(); ++f)
+    if (bsp.fragment_orientation[f] == 0 && planeSide(bsp.fragments[f].plane, eye) == 0) return true;
+  return false;
+}
+
+// Strictly inside one of the region's convex pieces (either winding), in doubles.
+bool insideRegion(const PfdTree& tree, const glm::dvec2& p) {
+  for (const auto& ring : tree.region) {
+    int pos = 0, neg = 0;
+    for (size_t i = 0; i < ring.size(); ++i) {
+      const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
+      const double c = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+      pos += c > 0;
+      neg += c < 0;
+    }
+    if (pos == static_cast<int>(ring.size()) || neg == static_cast<int>(ring.size())) return true;
+  }
+  return false;
+}
+
+struct CheckResult {
+  uint64_t eyes = 0, skipped = 0, mismatches = 0;
+  uint64_t max_tests = 0;
+};
+
+// The property: PFD order == BSP back-to-front order with back faces skipped, at random eyes.
+CheckResult checkTree(const BspTree& bsp, const PfdTree& tree, uint32_t eyes, uint64_t seed) {
+  CheckResult r;
+  std::vector<uint32_t> pfd, ref, coherent;
+  std::vector<PfdRun> runs;
+  PfdCursor cursor;
+  uint64_t state = seed;
+  glm::dvec2 prev = samplePfdRegion(tree, state);
+  for (uint32_t e = 0; e < eyes; ++e) {
+    // Alternate far jumps with small moves, so the coherent query sees both.
+    glm::dvec2 p = samplePfdRegion(tree, state);
+    // The region need not be convex: a small move stays only where it lands inside.
+    if (e % 2 == 1 && insideRegion(tree, prev + 0.02 * (p - prev))) p = prev + 0.02 * (p - prev);
+    prev = p;
+    const glm::dvec3 eye{p.x, tree.height, p.y};
+    const PfdQueryResult q = pfdQuery(tree, eye, pfd);
+    const PfdQueryResult qc = pfdQueryCoherent(tree, eye, cursor, coherent);
+    pfdQueryRuns(tree, eye, runs);
+    std::vector<uint32_t> from_runs;
+    for (const PfdRun& run : runs)
+      from_runs.insert(from_runs.end(), tree.fragment_ids.begin() + run.first,
+                       tree.fragment_ids.begin() + run.first + run.count);
+    EXPECT_EQ(from_runs, pfd);
+    if (q.on_line || onSomeVerticalPlane(bsp, eye)) {
+      ++r.skipped;
+      continue;
+    }
+    ++r.eyes;
+    backToFront(bsp, eye, ref, true);
+    r.max_tests = std::max<uint64_t>(r.max_tests, q.tests);
+    if (pfd != ref || coherent != ref || qc.on_line) {
+      if (r.mismatches < 3)
+        ADD_FAILURE() << "order differs at eye (" << eye.x << ", " << eye.y << ", " << eye.z << "): pfd "
+                      << pfd.size() << " ids, coherent " << coherent.size() << ", bsp " << ref.size();
+      ++r.mismatches;
+    }
+  }
+  return r;
+}
+
+void checkStructure(const BspTree& bsp, const PfdTree& tree) {
+  ASSERT_FALSE(tree.nodes.empty());
+  EXPECT_EQ(tree.stats.nodes, tree.nodes.size());
+  EXPECT_EQ(tree.stats.nodes, 2 * tree.stats.leaves - 1);
+  for (size_t i = 0; i < tree.nodes.size(); ++i) {
+    const PfdNode& n = tree.nodes[i];
+    EXPECT_EQ(n.front < 0, n.back < 0);
+    if (n.front >= 0) {
+      EXPECT_GT(n.front, static_cast<int32_t>(i));
+      EXPECT_GT(n.back, static_cast<int32_t>(i));
+      ASSERT_LT(n.plane, tree.planes.size());
+    }
+  }
+  for (const Plane& p : tree.planes) EXPECT_TRUE(p.n.x != 0.0 || p.n.z != 0.0) << "a horizontal plane is tested";
+  EXPECT_LE(tree.stats.test_planes, bsp.nodes.size() + bsp.fragments.size());
+  EXPECT_LE(tree.stats.tests_max, tree.stats.depth_max);
+  EXPECT_LE(tree.stats.tests_max, bsp.nodes.size() + bsp.fragments.size());
+  // No decision tree over these leaves does better on average than their entropy (sampling noise aside).
+  EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_entropy_bound);
+  EXPECT_LE(tree.stats.pool_entries, tree.stats.list_fragments);
+  EXPECT_GT(tree.stats.bytes, 0u);
+}
+
+TEST(Pfd, RandomBuildingsMatchBspOrder) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const Scene scene = randomBuilding(seed, 14, 1.5);
+    const BspTree bsp = buildBsp(scene);
+    for (PfdHeuristic heuristic : {PfdHeuristic::kTraversal, PfdHeuristic::kBalanced}) {
+      for (bool dedup : {true, false}) {
+        PfdOptions options;
+        options.heuristic = heuristic;
+        options.dedup = dedup;
+        options.stat_eyes = 2000;
+        const FloorLevel& level = scene.levels[0];
+        const PfdTree tree = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+        SCOPED_TRACE("seed " + std::to_string(seed) + (dedup ? " dedup" : " plain") +
+                     (heuristic == PfdHeuristic::kBalanced ? " balanced" : " traversal"));
+        checkStructure(bsp, tree);
+        const CheckResult r = checkTree(bsp, tree, 1500, seed * 7 + 1);
+        EXPECT_EQ(r.mismatches, 0u);
+        EXPECT_GT(r.eyes, 1400u);
+      }
+    }
+  }
+}
+
+TEST(Pfd, ViewCellsCoverTheLevel) {
+  const Scene scene = randomBuilding(11, 12, 1.5);
+  const BspTree bsp = buildBsp(scene);
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 500;
+  options.cell_memory = 4000;  // small: forces cells
+  options.max_cell_depth = 2;
+  uint64_t used = 0;
+  const PfdLevel level = buildPfdLevel(bsp, scene.levels[0], 0, scene.eye_height, options, used);
+  EXPECT_GT(level.cells.size(), 1u);
+  double area = 0.0;
+  for (const PfdTree& t : level.cells) area += t.stats.region_area;
+  EXPECT_NEAR(area, 400.0, 1e-6);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> c(0.0, 20.0);
+  std::vector<uint32_t> pfd, ref;
+  uint64_t checked = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const glm::dvec3 eye{c(rng), scene.eye_height, c(rng)};
+    const PfdTree* t = findPfdCell(level, eye);
+    ASSERT_NE(t, nullptr);
+    if (pfdQuery(*t, eye, pfd).on_line || onSomeVerticalPlane(bsp, eye)) continue;
+    backToFront(bsp, eye, ref, true);
+    EXPECT_EQ(pfd, ref);
+    ++checked;
+  }
+  EXPECT_GT(checked, 1900u);
+}
+
+TEST(Pfd, BudgetIsAClearError) {
+  const Scene scene = randomBuilding(2, 14, 1.5);
+  const BspTree bsp = buildBsp(scene);
+  PfdOptions options;
+  options.max_memory = 2000;
+  try {
+    (void)buildPfd(bsp, scene.levels[0].walkable, 1.5, std::nullopt, options);
+    FAIL() << "no budget error";
+  } catch (const PfdBudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("memory budget"), std::string::npos);
+  }
+}
+
+// Every level of a loaded scene, `eyes` eyes per tree.
+void checkScene(const std::string& spec, uint32_t eyes, uint64_t budget = 256ull << 20) {
+  Scene scene;
+  try {
+    scene = loadScene(spec);
+  } catch (const SceneError& e) {
+    GTEST_SKIP() << spec << ": " << e.what();
+  }
+  const BspTree bsp = buildBsp(scene);
+  for (size_t l = 0; l < scene.levels.size(); ++l) {
+    PfdOptions options;
+    options.stat_eyes = 1000;
+    options.max_memory = budget;
+    const FloorLevel& level = scene.levels[l];
+    const PfdTree tree = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+    SCOPED_TRACE(spec + " level " + std::to_string(l));
+    checkStructure(bsp, tree);
+    const CheckResult r = checkTree(bsp, tree, eyes, 99 + l);
+    EXPECT_EQ(r.mismatches, 0u);
+    EXPECT_GE(r.eyes + r.skipped, eyes);
+  }
+}
+
+TEST(Pfd, OfficeMatchesBspOrder) { checkScene("gen:office?rooms=6&floors=2&seed=3", 3000); }
+TEST(Pfd, NineFacetMatchesBspOrder) { checkScene("gen:ninefacet", 3000); }
+
+TEST(Pfd, HardCasesMatchBspOrder) {
+  for (const std::string& name : hardCaseNames()) {
+    if (name == "hard:nan" || name == "hard:infinite") continue;  // rejected by the loader
+    Scene scene;
+    try {
+      scene = loadScene("gen:" + name);
+    } catch (const SceneError&) {
+      continue;  // a case the loader rejects has no tree to check
+    }
+    const BspTree bsp = buildBsp(scene);
+    for (size_t l = 0; l < scene.levels.size(); ++l) {
+      PfdOptions options;
+      options.stat_eyes = 200;
+      options.max_memory = 256ull << 20;
+      const FloorLevel& level = scene.levels[l];
+      const PfdTree tree = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+      SCOPED_TRACE(name + " level " + std::to_string(l));
+      checkStructure(bsp, tree);
+      const CheckResult r = checkTree(bsp, tree, 1000, 5 + l);
+      EXPECT_EQ(r.mismatches, 0u);
+    }
+  }
+}
+
+TEST(Pfd, FreedoomMapMatchesBspOrder) { checkScene("freedoom2.wad:MAP01", 1000); }
+
+TEST(Pfd, TreeFileRoundTripAndCorruption) {
+  const Scene scene = randomBuilding(4, 10, 1.5);
+  TreeFile file;
+  file.bsp = buildBsp(scene);
+  file.eye_height = scene.eye_height;
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 100;
+  uint64_t used = 0;
+  file.levels.push_back(buildPfdLevel(file.bsp, scene.levels[0], 0, scene.eye_height, options, used));
+  const std::string path = (std::filesystem::temp_directory_path() / "walkvis_test_pfd.wvt").string();
+  saveTreeFile(file, path);
+  const TreeFile back = loadTreeFile(path);
+  ASSERT_EQ(back.levels.size(), 1u);
+  ASSERT_EQ(back.levels[0].cells.size(), file.levels[0].cells.size());
+  const PfdTree& a = file.levels[0].cells[0];
+  const PfdTree& b = back.levels[0].cells[0];
+  EXPECT_EQ(a.nodes.size(), b.nodes.size());
+  EXPECT_EQ(a.fragment_ids, b.fragment_ids);
+  EXPECT_EQ(back.bsp.fragments.size(), file.bsp.fragments.size());
+  std::vector<uint32_t> o1, o2;
+  uint64_t state = 9;
+  for (int i = 0; i < 200; ++i) {
+    const glm::dvec2 p = samplePfdRegion(a, state);
+    pfdQuery(a, {p.x, a.height, p.y}, o1);
+    pfdQuery(b, {p.x, b.height, p.y}, o2);
+    EXPECT_EQ(o1, o2);
+  }
+  // Corruption: every flipped byte, truncation and a wrong magic are clear errors, never crashes.
+  std::ifstream in(path, std::ios::binary);
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 64u);
+  for (size_t i = 0; i < bytes.size(); i += std::max<size_t>(1, bytes.size() / 97)) {
+    std::vector<uint8_t> bad = bytes;
+    bad[i] ^= 0x5a;
+    EXPECT_THROW(loadTreeFileFromMemory(bad, "corrupt"), SceneError) << "byte " << i;
+  }
+  for (size_t n : {size_t{0}, size_t{7}, bytes.size() / 2, bytes.size() - 1}) {
+    std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
+    EXPECT_THROW(loadTreeFileFromMemory(cut, "truncated"), SceneError) << n;
+  }
+  EXPECT_THROW(loadTreeFile(path + ".missing"), SceneError);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace walkvis

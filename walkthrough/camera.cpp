@@ -1,0 +1,51 @@
+// Cube-face cameras: a standard OpenGL perspective (fovy 90°, aspect 1), with the pixel-centre
+// rays derived from the same frame so that GL rasterisation and ray casting sample the same rays.
+#include "walkthrough/camera.h"
+
+#include <algorithm>
+
+namespace walkvis {
+
+CubeFrame cubeFrame(int face) {
+  switch (std::clamp(face, 0, kCubeFaces - 1)) {
+    case 0: return {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}};
+    case 1: return {{-1, 0, 0}, {0, 0, -1}, {0, 1, 0}};
+    case 2: return {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}};
+    case 3: return {{0, -1, 0}, {1, 0, 0}, {0, 0, -1}};
+    case 4: return {{0, 0, 1}, {-1, 0, 0}, {0, 1, 0}};
+    default: return {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}};
+  }
+}
+
+glm::dvec3 pixelRay(const View& view, int i, int j) {
+  const CubeFrame f = cubeFrame(view.face);
+  const double s = view.size;
+  const double a = 2.0 * (i + 0.5) / s - 1.0;
+  const double b = 1.0 - 2.0 * (j + 0.5) / s;
+  return f.forward + a * f.right + b * f.up;
+}
+
+std::array<float, 16> clipFromEyeRelative(const View& view) {
+  const CubeFrame f = cubeFrame(view.face);
+  const double n = view.near, fa = view.far;
+  // Camera space: x = right·p, y = up·p, z = -forward·p (looking down -z).
+  // Clip: (x, y, A z + B, -z) with A = (f + n) / (n - f), B = 2 f n / (n - f).
+  const double A = (fa + n) / (n - fa);
+  const double B = 2.0 * fa * n / (n - fa);
+  // Rows of the clip matrix as functions of p.
+  const glm::dvec3 row0 = f.right, row1 = f.up, row2 = -A * f.forward, row3 = f.forward;
+  std::array<float, 16> m{};
+  auto set = [&](int row, const glm::dvec3& r, double w) {
+    m[0 * 4 + row] = static_cast<float>(r.x);
+    m[1 * 4 + row] = static_cast<float>(r.y);
+    m[2 * 4 + row] = static_cast<float>(r.z);
+    m[3 * 4 + row] = static_cast<float>(w);
+  };
+  set(0, row0, 0.0);
+  set(1, row1, 0.0);
+  set(2, row2, B);
+  set(3, row3, 0.0);
+  return m;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,44 @@
+// Cube-face cameras shared by the OpenGL renderer and the exact ray caster. Both MUST derive their
+// rays from the same numbers, so a pixel means the same ray everywhere: pixelRay() is the ray
+// through a pixel centre, and clipFromEyeRelative() is the GL matrix built to match it exactly.
+//
+// Image convention: size × size pixels, column i from the left, row j from the TOP, pixel index
+// j * size + i. A ray is eye + t * dir with dir's component along the face's forward axis equal
+// to 1, so t is the camera depth (the distance along the view axis), the same quantity the GL
+// near and far planes clip.
+#pragma once
+
+#include <array>
+
+#include <glm/vec3.hpp>
+
+namespace walkvis {
+
+constexpr int kCubeFaces = 6;
+
+// An orthonormal, right-handed view frame: forward = up × right. Face 0..5 look along
+// +x, -x, +y, -y, +z, -z. All components are 0 or ±1, so the frames are exact in float too.
+struct CubeFrame {
+  glm::dvec3 forward, right, up;
+};
+CubeFrame cubeFrame(int face);  // face in [0, 6); anything else is clamped into range
+
+// One 90° square view: a cube face seen from `eye`, clipped to camera depth [near, far].
+struct View {
+  glm::dvec3 eye{0.0};
+  int face = 0;
+  int size = 256;     // pixels per side, > 0
+  double near = 0.1;  // > 0
+  double far = 1e4;   // > near
+};
+
+// Direction of the ray through the centre of pixel (i, j) (not normalised; forward component 1).
+glm::dvec3 pixelRay(const View& view, int i, int j);
+
+// Column-major 4×4 clip matrix for vertex positions given RELATIVE TO THE EYE (p - eye): the
+// face's rotation followed by a 90°, aspect-1 OpenGL perspective with the view's near and far.
+// A point eye + t * pixelRay(view, i, j) lands on the centre of pixel (i, j) with the GL
+// convention of rows counted from the bottom (the renderer flips rows on readback).
+std::array<float, 16> clipFromEyeRelative(const View& view);
+
+}  // namespace walkvis

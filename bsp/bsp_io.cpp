@@ -18,6 +18,7 @@
 #include <string>
 
 #include "bsp/bsp.h"
+#include "scenes/byte_io.h"
 #include "scenes/loaders.h"
 
 namespace walkvis {
@@ -31,31 +32,7 @@ constexpr size_t kVertexBytes = 3 * 8;
 constexpr size_t kFragmentBytes = 4 * 4 + 4 * 8 + 1;
 constexpr size_t kNodeBytes = 4 * 8 + 7 * 4;
 
-uint64_t fnv1a(const uint8_t* data, size_t size) {
-  uint64_t h = 1469598103934665603ull;
-  for (size_t i = 0; i < size; ++i) {
-    h ^= data[i];
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
-class Writer {
- public:
-  template <typename T>
-  void put(T value) {
-    const size_t at = bytes.size();
-    bytes.resize(at + sizeof(T));
-    std::memcpy(bytes.data() + at, &value, sizeof(T));
-  }
-  void putPlane(const Plane& p) {
-    put(p.n.x);
-    put(p.n.y);
-    put(p.n.z);
-    put(p.d);
-  }
-  std::vector<uint8_t> bytes;
-};
+using Writer = ByteWriter;
 
 class Reader {
  public:

@@ -17,6 +17,7 @@
 #include <fstream>
 
 #include "pfd_hfd/pfd.h"
+#include "scenes/byte_io.h"
 #include "scenes/loaders.h"
 
 namespace walkvis {
@@ -26,30 +27,8 @@ constexpr char kMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
 constexpr uint32_t kVersion = 1;
 constexpr size_t kHeaderBytes = 32;
 
-uint64_t fnv1a(const uint8_t* data, size_t size) {
-  uint64_t h = 1469598103934665603ull;
-  for (size_t i = 0; i < size; ++i) {
-    h ^= data[i];
-    h *= 1099511628211ull;
-  }
-  return h;
-}
+using Writer = ByteWriter;
 
-struct Writer {
-  std::vector<uint8_t> bytes;
-  template <class T>
-  void put(T v) {
-    const size_t at = bytes.size();
-    bytes.resize(at + sizeof(T));
-    std::memcpy(bytes.data() + at, &v, sizeof(T));
-  }
-  void putPlane(const Plane& p) {
-    put(p.n.x);
-    put(p.n.y);
-    put(p.n.z);
-    put(p.d);
-  }
-};
 
 struct Reader {
   std::span<const uint8_t> bytes;

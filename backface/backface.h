@@ -67,10 +67,24 @@ struct BackfaceOptions {
   // view cone may be culled. false (default) = each group's cone is the cone from the eye around
   // the group's bounding sphere (§3.2), conservative for every polygon.
   bool mask_use_view_cone = false;
+  // mask in priority lists (list_cull.h): a chunk of fewer positions than this is tested by the
+  // exact plane test instead of a table. One table costs 0.85-1.1 us to build (N = 16), about the
+  // plane test on 1,000 listed polygons, and PFD runs average under 2 fragments; 1 = tables only.
+  uint32_t mask_list_min_chunk = 512;
   // cluster: T/R, the time of one cluster test over the time to render one vertex (paper §3).
   double cluster_tr = 1.0;
   // cluster: side R of the near-field box, as a multiple of the model's bounding-box diagonal.
   double cluster_near_field = 10.0;
+  // cluster: the box the eyes are in, for the culling probability that drives clustering (world
+  // coordinates). Empty (lo > hi, the default): the paper's near-field box of side R =
+  // cluster_near_field × the model's diagonal around each cluster's own origin b, i.e. a model seen
+  // from around it. For eyes inside a building set it (list_cull.h does, to the box of all
+  // vertices): with the box around b, parallel walls at any offsets score as well as one wall (b
+  // moves to the outermost plane), so Algorithm 1 merges each wall orientation into one cluster,
+  // which an eye inside the building never culls (gen:office: 6 clusters, 0 culled per frame).
+  // A flat box (an eye height plane) is allowed: the probability is then over its area.
+  glm::dvec3 cluster_eye_lo{INFINITY};
+  glm::dvec3 cluster_eye_hi{-INFINITY};
   // cluster: arrange the cluster tests in a hierarchy with front-face tests at inner nodes (§2.3).
   bool cluster_hierarchy = true;
   // cone: meshlet limits (the issue asks for 64 / 124) and meshoptimizer's cone_weight.
@@ -125,9 +139,22 @@ std::unique_ptr<BackfaceCuller> makeClusterCuller(const BackfaceInput& input, co
 std::unique_ptr<BackfaceCuller> makeConeCuller(const BackfaceInput& input, const BackfaceOptions& options);
 std::unique_ptr<BackfaceCuller> makeHierarchyCuller(const BackfaceInput& input, const BackfaceOptions& options);
 
+// cone: polygon_invisible[p] = 1 when polygon p has no area at single precision: meshoptimizer
+// finds no triangle of it with nonzero area in the float positions the cone culler gives it (a
+// meshlet of only such polygons is culled for every eye by the documented test: the library's
+// "trivial reject"), or its area is below what rounding its vertices to float can create or erase
+// (its float normal is then noise). Such a polygon has no pixels; this lets a report tell those
+// culls apart from culls of polygons that have area (meshlet_cone.cpp). Throws SceneError unless
+// polygon_invisible.size() == input.polygons.size().
+void coneInvisiblePolygons(const BackfaceInput& input, std::span<uint8_t> polygon_invisible);
+
 // Johannsen & Carter's near-field culling probability of one cluster test (exposed for tests):
 // the fraction of the cube [-half, half]³ (local coordinates around the origin b) in which
 // Comp_e(N, M)·e − d <= 0.
 double nearFieldCullProbability(const glm::dvec3& n_min, const glm::dvec3& n_max, double d, double half);
+// The same over the box [lo, hi] (local coordinates around b; lo <= hi, an axis may be flat): the
+// share of the box's volume (of its area or length over the axes with extent) where the test culls.
+double boxCullProbability(const glm::dvec3& n_min, const glm::dvec3& n_max, double d, const glm::dvec3& lo,
+                          const glm::dvec3& hi);
 
 }  // namespace walkvis

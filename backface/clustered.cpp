@@ -12,6 +12,9 @@
 // §2.4/§3 origin b: the 8 corners of the cluster's bounding box and its centroid, the one with the
 // highest near-field culling probability (the share of the R×R×R box around b, R = 10 × the
 // model's bounding-box diagonal, in which (8) culls).
+// Walkthroughs (ours): with options.cluster_eye_lo/hi set, the probability is the share of that
+// fixed eye box instead of the box around b (boxCullProbability); see backface.h for why the box
+// around b merges every wall orientation of a building into one unculled cluster.
 // §3 Algorithm 1, adapted to polygon lists (a polygon plays a tristrip, its vertex count its
 // rendering cost C/R): seed = the remaining polygon with the highest culling probability; add the
 // remaining polygons in order of decreasing n·n_seed while the merge pays off by the cost model;
@@ -173,6 +176,17 @@ class ClusterCuller final : public BackfaceCuller {
     }
     const double diag = count ? glm::length(hi - lo) : 0.0;
     half_ = 0.5 * options.cluster_near_field * (diag > 0.0 ? diag : 1.0);
+    const glm::dvec3& elo = options.cluster_eye_lo;
+    const glm::dvec3& ehi = options.cluster_eye_hi;
+    eye_box_ = elo.x <= ehi.x && elo.y <= ehi.y && elo.z <= ehi.z;
+    if (eye_box_) {
+      for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(elo[k]) || !std::isfinite(ehi[k])) throw SceneError("backface cluster: the eye box is not finite");
+      }
+      if (elo == ehi) throw SceneError("backface cluster: the eye box is a point");
+      eye_lo_ = elo;
+      eye_hi_ = ehi;
+    }
 
     formClusters(options.cluster_tr);
     buildNodes();
@@ -245,7 +259,8 @@ class ClusterCuller final : public BackfaceCuller {
                          toFloatPrecision(candidate.z));
       double d = INFINITY;
       for (uint32_t p : members) d = std::min(d, polys_[p].dd - glm::dot(polys_[p].n, b));
-      const double prob = nearFieldCullProbability(s.n_min, s.n_max, d, half_);
+      const double prob = eye_box_ ? boxCullProbability(s.n_min, s.n_max, d, eye_lo_ - b, eye_hi_ - b)
+                                   : nearFieldCullProbability(s.n_min, s.n_max, d, half_);
       if (prob > best.probability) best = {prob, b, d};
     }
     return best;
@@ -399,6 +414,8 @@ class ClusterCuller final : public BackfaceCuller {
 
   bool hierarchy_;
   double half_ = 1.0;
+  bool eye_box_ = false;
+  glm::dvec3 eye_lo_{0.0}, eye_hi_{0.0};
   double max_dd_ = 0.0;
   double scale_ = 0.0;
   std::vector<PolyData> polys_;  // build time only
@@ -420,6 +437,45 @@ double nearFieldCullProbability(const glm::dvec3& n_min, const glm::dvec3& n_max
     total += cubeFraction(a, d / half);
   }
   return total / 8.0;
+}
+
+double boxCullProbability(const glm::dvec3& n_min, const glm::dvec3& n_max, double d, const glm::dvec3& lo,
+                          const glm::dvec3& hi) {
+  // The box cut by the coordinate planes through b into up to eight boxes; in each the test is
+  // linear, a·e' <= d with a = Comp(N, M) of that octant, and t = l + (u − l)·s maps it onto the
+  // unit cube. An axis without extent contributes its constant only, and no factor to the measure.
+  const glm::dvec3 width = hi - lo;
+  double total = 0.0;
+  for (int o = 0; o < 8; ++o) {
+    std::array<double, 3> a{};
+    double shift = d, measure = 1.0;
+    bool empty = false;
+    for (int c = 0; c < 3; ++c) {
+      const bool positive = (o >> c) & 1;
+      double l, u;
+      if (width[c] > 0.0) {
+        l = positive ? std::max(lo[c], 0.0) : lo[c];
+        u = positive ? hi[c] : std::min(hi[c], 0.0);
+        if (!(u > l)) {
+          empty = true;
+          break;
+        }
+        measure *= (u - l) / width[c];
+      } else {
+        // A flat axis lies in one octant: e'^c > 0 picks M, else N (as the test does).
+        if ((lo[c] > 0.0) != positive) {
+          empty = true;
+          break;
+        }
+        l = u = lo[c];
+      }
+      const double coef = positive ? n_max[c] : n_min[c];
+      shift -= coef * l;
+      a[static_cast<size_t>(c)] = coef * (u - l);
+    }
+    if (!empty) total += measure * cubeFraction(a, shift);
+  }
+  return std::clamp(total, 0.0, 1.0);
 }
 
 std::unique_ptr<BackfaceCuller> makeClusterCuller(const BackfaceInput& input, const BackfaceOptions& options) {

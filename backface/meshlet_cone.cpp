@@ -9,6 +9,18 @@
 // meshlets is culled only when all of them are (expandToPolygons). State: the sphere and the cone,
 // 32 bytes per meshlet. No margin of ours: this is the library's test as documented, measured as
 // it is (false culls, if any, are the library's float arithmetic and are reported).
+//
+// Zero-area polygons (issue 6 follow-up: the 2,327 "false culls" in the Freedoom MAP01 PFD lists):
+// meshopt_computeClusterBounds (clusterizer.cpp) skips triangles whose float cross product is
+// exactly zero, as invisible, and returns all-zero bounds for a meshlet of only such triangles
+// (its comment: "degenerate cluster, no valid triangles => trivial reject (cone data is 0)"); the
+// documented test then reads 0 >= 0·|c − e| + 0 and culls it for every eye. Our ground truth (the polygon's plane) calls such a polygon front-facing from
+// its front side, so the bench counts it as a false cull; it has no pixels. Every such cull seen
+// was of this kind (BSP fragments of MAP01 that are points or segments, area <= 1.4e-10 in double,
+// exactly zero after rounding to float), or a sliver of the same kind whose float triangles have
+// an area made by rounding alone and so a normal unrelated to its plane (118 of the 2,327: segment-
+// like fragments up to 288 units long, float normals 27-117° off the plane). coneInvisiblePolygons()
+// names both kinds, so that a report can tell them apart from a culled polygon that has area.
 #include <meshoptimizer.h>
 
 #include <algorithm>
@@ -49,6 +61,48 @@ struct TriKeyHash {
   }
 };
 
+// The library's input: fan triangles over positions welded by exact equality, relative to the
+// centre of the input's box, in float.
+struct MeshInput {
+  glm::dvec3 origin{0.0};
+  std::vector<float> positions;
+  std::vector<uint32_t> indices, triangle_polygon;
+};
+
+MeshInput meshInput(const BackfaceInput& input) {
+  MeshInput m;
+  std::unordered_map<glm::dvec3, uint32_t, Vec3Hash> weld;
+  if (!input.vertices.empty()) {
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const auto& v : input.vertices) {
+      lo = glm::min(lo, v);
+      hi = glm::max(hi, v);
+    }
+    m.origin = 0.5 * (lo + hi);
+  }
+  auto vertexIndex = [&](const glm::dvec3& v) {
+    auto [it, inserted] = weld.try_emplace(v, static_cast<uint32_t>(weld.size()));
+    if (inserted) {
+      m.positions.push_back(static_cast<float>(v.x - m.origin.x));
+      m.positions.push_back(static_cast<float>(v.y - m.origin.y));
+      m.positions.push_back(static_cast<float>(v.z - m.origin.z));
+    }
+    return it->second;
+  };
+  for (size_t p = 0; p < input.polygons.size(); ++p) {
+    const Polygon& poly = input.polygons[p];
+    const uint32_t first = vertexIndex(input.vertices[poly.first_vertex]);
+    uint32_t prev = vertexIndex(input.vertices[poly.first_vertex + 1]);
+    for (uint32_t k = 2; k < poly.vertex_count; ++k) {
+      const uint32_t next = vertexIndex(input.vertices[poly.first_vertex + k]);
+      m.indices.insert(m.indices.end(), {first, prev, next});
+      m.triangle_polygon.push_back(static_cast<uint32_t>(p));
+      prev = next;
+    }
+  }
+  return m;
+}
+
 class ConeCuller final : public BackfaceCuller {
  public:
   ConeCuller(const BackfaceInput& input, const BackfaceOptions& options) {
@@ -57,37 +111,11 @@ class ConeCuller final : public BackfaceCuller {
       throw SceneError("backface cone: meshlet limits must be 3..255 vertices and 4..512 triangles (a multiple of 4)");
     }
     polygon_count_ = input.polygons.size();
-    std::unordered_map<glm::dvec3, uint32_t, Vec3Hash> weld;
-    std::vector<float> positions;
-    std::vector<uint32_t> indices, triangle_polygon;
-    if (!input.vertices.empty()) {
-      glm::dvec3 lo(INFINITY), hi(-INFINITY);
-      for (const auto& v : input.vertices) {
-        lo = glm::min(lo, v);
-        hi = glm::max(hi, v);
-      }
-      origin_ = 0.5 * (lo + hi);
-    }
-    auto vertexIndex = [&](const glm::dvec3& v) {
-      auto [it, inserted] = weld.try_emplace(v, static_cast<uint32_t>(weld.size()));
-      if (inserted) {
-        positions.push_back(static_cast<float>(v.x - origin_.x));
-        positions.push_back(static_cast<float>(v.y - origin_.y));
-        positions.push_back(static_cast<float>(v.z - origin_.z));
-      }
-      return it->second;
-    };
-    for (size_t p = 0; p < input.polygons.size(); ++p) {
-      const Polygon& poly = input.polygons[p];
-      const uint32_t first = vertexIndex(input.vertices[poly.first_vertex]);
-      uint32_t prev = vertexIndex(input.vertices[poly.first_vertex + 1]);
-      for (uint32_t k = 2; k < poly.vertex_count; ++k) {
-        const uint32_t next = vertexIndex(input.vertices[poly.first_vertex + k]);
-        indices.insert(indices.end(), {first, prev, next});
-        triangle_polygon.push_back(static_cast<uint32_t>(p));
-        prev = next;
-      }
-    }
+    MeshInput mesh = meshInput(input);
+    origin_ = mesh.origin;
+    const std::vector<float>& positions = mesh.positions;
+    const std::vector<uint32_t>& indices = mesh.indices;
+    const std::vector<uint32_t>& triangle_polygon = mesh.triangle_polygon;
     unit_begin_.push_back(0);
     if (indices.empty()) return;
     const size_t vertex_count = positions.size() / 3;
@@ -161,6 +189,50 @@ class ConeCuller final : public BackfaceCuller {
 };
 
 }  // namespace
+
+void coneInvisiblePolygons(const BackfaceInput& input, std::span<uint8_t> polygon_invisible) {
+  if (polygon_invisible.size() != input.polygons.size()) {
+    throw SceneError("backface cone: coneInvisiblePolygons needs one flag per polygon");
+  }
+  const MeshInput mesh = meshInput(input);
+  const size_t vertex_count = mesh.positions.size() / 3;
+  // The library's own verdict per polygon: bounds of its triangles alone; all zero (radius 0 and
+  // an empty cone) is its "no valid triangles" case. A polygon with a triangle of nonzero float
+  // area has distinct corners, hence a radius > 0. Then slivers whose float area is rounding noise.
+  size_t t = 0;
+  for (size_t p = 0; p < input.polygons.size(); ++p) {
+    size_t end = t;
+    while (end < mesh.triangle_polygon.size() && mesh.triangle_polygon[end] == p) ++end;
+    bool invisible = true;
+    for (size_t at = t; at < end && invisible; at += 512) {  // the library takes at most 512 triangles
+      const size_t n = std::min<size_t>(512, end - at);
+      const meshopt_Bounds b = meshopt_computeClusterBounds(mesh.indices.data() + 3 * at, 3 * n, mesh.positions.data(),
+                                                            vertex_count, 3 * sizeof(float));
+      invisible = b.radius == 0.0f && b.cone_cutoff == 0.0f && b.cone_axis[0] == 0.0f && b.cone_axis[1] == 0.0f &&
+                  b.cone_axis[2] == 0.0f;
+    }
+    if (!invisible) {
+      // Rounding a vertex to float moves it by up to 2⁻²⁴·|v| per coordinate (≤ 2⁻²³·L in all, L the
+      // largest coordinate, relative to the origin, of the polygon); that changes the area by up to
+      // about that times the polygon's extent D. An area below 2⁻²²·L·D (double that) can be created
+      // or erased by the rounding alone: the float triangles' normal is noise, not the plane's
+      // (MAP01: segment-like fragments 80 units long of area ~1e-11, float normal 117° off).
+      const Polygon& poly = input.polygons[p];
+      glm::dvec3 area2(0.0);
+      double extent = 0.0, magnitude = 0.0;
+      const glm::dvec3 v0 = input.vertices[poly.first_vertex] - mesh.origin;
+      for (uint32_t k = 0; k < poly.vertex_count; ++k) {
+        const glm::dvec3 v = input.vertices[poly.first_vertex + k] - mesh.origin;
+        magnitude = std::max({magnitude, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+        extent = std::max(extent, 2.0 * glm::length(v - v0));
+        if (k >= 2) area2 += glm::cross(input.vertices[poly.first_vertex + k - 1] - mesh.origin - v0, v - v0);
+      }
+      invisible = 0.5 * glm::length(area2) <= std::ldexp(1.0, -22) * magnitude * extent;
+    }
+    polygon_invisible[p] = invisible ? 1 : 0;
+    t = end;
+  }
+}
 
 std::unique_ptr<BackfaceCuller> makeConeCuller(const BackfaceInput& input, const BackfaceOptions& options) {
   return std::make_unique<ConeCuller>(input, options);

@@ -17,54 +17,167 @@
 // gets its own cone, the cone from the eye around the group's bounding sphere (§3.2, "a viewing
 // cone to each object group"), which holds every direction from the eye to the group: conservative
 // for every polygon. An eye inside a group's sphere culls nothing in that group.
+//
+// Speed (issue 6, target <= 0.3 ns per polygon): the per-frame loop reads a 2-byte cluster id per
+// polygon and one byte of a 2048-byte table (normal_mask.h), no branch; within each group the
+// polygons are stored sorted by cluster id (the unit order is free: a renderer stores its polygons
+// in that order), so the table reads walk forward through the table.
+#include "backface/normal_mask.h"
+
 #include <algorithm>
-#include <array>
 #include <cmath>
+#include <cstring>
 #include <numeric>
+#include <string>
 
 #include "backface/backface.h"
 
 namespace walkvis {
+
+namespace {
+// Margin on the cap test n̂·a > sin θ, evaluated in single precision: the float corner
+// directions, axis and limit (relative error 2⁻²⁴ each) and the three-term sum stay below
+// 5e-7 in all; 2e-6 leaves a factor four and only spares clusters within ~2e-6 rad of the rim.
+constexpr double kCapMargin = 2e-6;
+
+// kSpread[b]: the eight bits of b as eight bytes 0/1 (byte j = bit j), for writing a row of
+// table entries from a row of bits.
+constexpr std::array<uint64_t, 256> makeSpread() {
+  std::array<uint64_t, 256> t{};
+  for (uint64_t b = 0; b < 256; ++b) {
+    for (int j = 0; j < 8; ++j) t[b] |= ((b >> j) & 1u) << (8 * j);
+  }
+  return t;
+}
+constexpr std::array<uint64_t, 256> kSpread = makeSpread();
+}  // namespace
+
+NormalMaskGrid::NormalMaskGrid(int n) : n_(n) {
+  if (n_ < 1 || n_ > kMaxResolution) {
+    throw SceneError("backface mask: mask_resolution must be in [1, 18], got " + std::to_string(n_));
+  }
+  const size_t m = static_cast<size_t>(n_) + 1;
+  for (int face = 0; face < 6; ++face) {
+    const int k = face / 2;
+    const double sign = face % 2 == 0 ? 1.0 : -1.0;
+    const int a = k == 0 ? 1 : 0, b = k == 2 ? 1 : 2;
+    for (auto& axis : corner_[static_cast<size_t>(face)]) axis.resize(m * m);
+    for (size_t i = 0; i < m; ++i) {
+      for (size_t j = 0; j < m; ++j) {
+        glm::dvec3 c(0.0);
+        c[k] = sign;
+        c[a] = -1.0 + 2.0 * static_cast<double>(i) / n_;
+        c[b] = -1.0 + 2.0 * static_cast<double>(j) / n_;
+        c /= glm::length(c);
+        for (int x = 0; x < 3; ++x) corner_[static_cast<size_t>(face)][static_cast<size_t>(x)][i * m + j] = static_cast<float>(c[x]);
+      }
+    }
+  }
+}
+
+uint16_t NormalMaskGrid::cell(const glm::dvec3& n) const {
+  const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);
+  int k = 0;
+  if (ay > ax && ay >= az) k = 1;
+  else if (az > ax && az > ay) k = 2;
+  const int a = k == 0 ? 1 : 0, b = k == 2 ? 1 : 2;
+  const double nk = n[k];
+  if (!(std::abs(nk) > 0.0) || !std::isfinite(nk)) return kNeverCell;
+  const int face = 2 * k + (nk < 0.0 ? 1 : 0);
+  auto index = [&](double c) {
+    const double t = (c / std::abs(nk) + 1.0) * 0.5 * n_;
+    if (!(t >= 0.0)) return 0;
+    return std::min(static_cast<int>(t), n_ - 1);
+  };
+  return static_cast<uint16_t>(face * n_ * n_ + index(n[a]) * n_ + index(n[b]));
+}
+
+// The cap n̂·axis > sin θ is spherically convex and a cluster is the cone over a square of the
+// cube face, so all four corners in the cap puts every normal of the cluster in it.
+void NormalMaskGrid::backTable(const glm::dvec3& axis, double sin_theta, Table& table) const {
+  std::memset(table.data(), 0, static_cast<size_t>(6 * n_ * n_));
+  table[kNeverCell] = 0;
+  const size_t m = static_cast<size_t>(n_) + 1;
+  const double limit = sin_theta + kCapMargin;
+  if (!(limit < 1.0)) return;  // the cap is empty
+  // The cap's angular radius is ρ = acos(limit); a face's normals lie within 54.74° (acos(1/√3))
+  // of its centre; the cap cannot hold a corner of a face whose centre is ρ + 54.74° or more
+  // away from the axis: skip it (cheap; the corner test decides everything else).
+  const double reach = std::acos(limit) + std::acos(1.0 / std::sqrt(3.0));
+  const double min_cos = reach >= M_PI ? -2.0 : std::cos(reach);
+  for (int face = 0; face < 6; ++face) {
+    const int k = face / 2;
+    const double centre_cos = (face % 2 == 0 ? 1.0 : -1.0) * axis[k];
+    if (centre_cos <= min_cos) continue;
+    const auto& c = corner_[static_cast<size_t>(face)];
+    const float* cx = c[0].data();
+    const float* cy = c[1].data();
+    const float* cz = c[2].data();
+    const float ax = static_cast<float>(axis.x), ay = static_cast<float>(axis.y), az = static_cast<float>(axis.z);
+    const float lim = static_cast<float>(limit);
+    std::array<uint8_t, (kMaxResolution + 1) * (kMaxResolution + 1)> hit;
+    for (size_t q = 0; q < m * m; ++q) hit[q] = cx[q] * ax + cy[q] * ay + cz[q] * az > lim;  // vectorizes
+    // Rows of corner bits; a cell is in when its four corners are: two shifts and three ANDs per row.
+    std::array<uint32_t, kMaxResolution + 1> row{};
+    uint32_t any = 0;
+    for (size_t i = 0; i < m; ++i) {
+      uint32_t bits = 0;
+      for (size_t j = 0; j < m; ++j) bits |= static_cast<uint32_t>(hit[i * m + j]) << j;
+      row[i] = bits;
+      any |= bits;
+    }
+    if (!any) continue;
+    uint8_t* out = table.data() + face * n_ * n_;
+    for (size_t i = 0; i < static_cast<size_t>(n_); ++i) {
+      // Bit j < N: cell (i, j); bit N and above are 0 (the row has N + 1 corner bits).
+      const uint32_t cells = row[i] & (row[i] >> 1) & row[i + 1] & (row[i + 1] >> 1);
+      // Eight entries at a time; the last write may run up to 7 bytes into the next row or face,
+      // writing zeros there before that row is written (faces and rows go in order; the table
+      // has room: 6·18² + 7 < 2048).
+      for (size_t j = 0; j < static_cast<size_t>(n_); j += 8) {
+        const uint64_t bytes = kSpread[(cells >> j) & 0xffu];
+        std::memcpy(out + i * static_cast<size_t>(n_) + j, &bytes, 8);
+      }
+    }
+  }
+}
+
+bool sphereCone(const glm::dvec3& eye, const glm::dvec3& center, double radius, glm::dvec3& axis, double& sin_theta) {
+  const double eye_scale = kMaskSphereGrowth * std::max({std::abs(eye.x), std::abs(eye.y), std::abs(eye.z)});
+  const glm::dvec3 to = center - eye;
+  const double dist = glm::length(to);
+  const double r = radius + eye_scale;
+  if (!(dist > r) || !std::isfinite(dist)) return false;  // eye inside the sphere: every direction is possible
+  axis = to / dist;
+  sin_theta = r / dist;
+  return true;
+}
+
 namespace {
 
-constexpr int kMaxResolution = 18;  // 6·18² = 1944 clusters <= 2048 = 256 bytes · 8 bits (§2.2)
+// Mean polygons per run of one cluster id from which a group fills runs rather than reading the
+// table per polygon (measured: a fill costs about as much as eight single reads and stores).
+constexpr uint32_t kMinMeanRun = 8;
 
-// Margin on the cap test n̂·a > sin θ: the corner directions, the cone axis and a normal's cell
-// carry rounding errors below 1e-15; 1e-9 leaves six orders of magnitude and only spares clusters
-// within ~1e-9 rad of the cap's rim.
-constexpr double kCapMargin = 1e-9;
-// Growth of a group's bounding sphere, relative to the coordinates' magnitude (its centre and
-// radius at build time, the eye's per frame): a culled group's sphere then clears the eye's
-// tangent cone by this much, far more than the ground truth's own rounding (4·2⁻⁵³ of the same
-// magnitudes), so a polygon isFrontFacing() calls front-facing is never inside a culled cone.
-constexpr double kSphereGrowth = 1e-9;
-
-// A cell index whose byte lies past every real cell (6·18² bits fill 243 bytes): its mask byte
-// stays zero, so a polygon with a zero normal is never culled.
-constexpr int kNeverCell = 255 * 8;
+struct Run {
+  uint32_t begin;  // first unit; the run ends where the next begins (or at its group's end)
+  uint16_t cell;
+};
 
 struct Group {
   uint32_t begin = 0, end = 0;  // range of units (polygons in group order)
   glm::dvec3 center{0.0};
-  double radius = 0.0;  // grown by kSphereGrowth·(|center|∞ + radius) and the plane residuals
+  double radius = 0.0;  // grown by kMaskSphereGrowth·(|center|∞ + radius) and the plane residuals
+  uint32_t run_begin = 0, run_end = 0;  // runs_ of this group when use_runs
+  bool use_runs = false;
 };
 
 class NormalMaskCuller final : public BackfaceCuller {
  public:
   NormalMaskCuller(const BackfaceInput& input, const BackfaceOptions& options)
-      : n_(options.mask_resolution), use_view_cone_(options.mask_use_view_cone) {
-    if (n_ < 1 || n_ > kMaxResolution) {
-      throw SceneError("backface mask: mask_resolution must be in [1, 18], got " + std::to_string(n_));
-    }
+      : grid_(options.mask_resolution), use_view_cone_(options.mask_use_view_cone) {
     const size_t count = input.polygons.size();
     polygon_count_ = count;
-    // Corner grid: u_[i] = -1 + 2i/N; inv_len_[i][j] = 1 / |(±1, u_i, u_j)|.
-    u_.resize(static_cast<size_t>(n_) + 1);
-    for (int i = 0; i <= n_; ++i) u_[static_cast<size_t>(i)] = -1.0 + 2.0 * i / n_;
-    inv_len_.resize(u_.size() * u_.size());
-    for (size_t i = 0; i < u_.size(); ++i) {
-      for (size_t j = 0; j < u_.size(); ++j) inv_len_[i * u_.size() + j] = 1.0 / std::sqrt(1.0 + u_[i] * u_[i] + u_[j] * u_[j]);
-    }
 
     // Spatial groups (§3.2): median splits on the longest axis of the centroids' box.
     std::vector<glm::dvec3> centroid(count);
@@ -78,115 +191,86 @@ class NormalMaskCuller final : public BackfaceCuller {
     std::iota(unit_polygons_.begin(), unit_polygons_.end(), 0u);
     const size_t group_size = options.mask_group_size == 0 ? std::max<size_t>(count, 1) : options.mask_group_size;
     split(0, static_cast<uint32_t>(count), group_size, centroid);
-    if (groups_.empty()) groups_.push_back({0, 0, glm::dvec3(0.0), 0.0});
-    for (Group& g : groups_) bound(g, input);
-
+    if (groups_.empty()) groups_.push_back(Group{});
+    std::vector<uint16_t> poly_cell(count);
+    for (size_t p = 0; p < count; ++p) poly_cell[p] = grid_.cell(input.polygons[p].plane.n);
+    for (Group& g : groups_) {
+      bound(g, input);
+      std::stable_sort(unit_polygons_.begin() + g.begin, unit_polygons_.begin() + g.end,
+                       [&](uint32_t p, uint32_t q) { return poly_cell[p] < poly_cell[q]; });
+    }
     unit_begin_.resize(count + 1);
     std::iota(unit_begin_.begin(), unit_begin_.end(), 0u);
-    offset_.resize(count);
-    bit_.resize(count);
-    for (size_t u = 0; u < count; ++u) {
-      const int cell = encode(input.polygons[unit_polygons_[u]].plane.n);
-      offset_[u] = static_cast<uint8_t>(cell >> 3);
-      bit_[u] = static_cast<uint8_t>(1u << (cell & 7));
+    cell_.resize(count);
+    for (size_t u = 0; u < count; ++u) cell_[u] = poly_cell[unit_polygons_[u]];
+    // Runs of one cluster id: where they are long, the per-polygon reads of one table entry are
+    // one read and one fill (same flags, a fraction of the time).
+    for (Group& g : groups_) {
+      g.run_begin = static_cast<uint32_t>(runs_.size());
+      for (uint32_t u = g.begin; u < g.end; ++u) {
+        if (u == g.begin || cell_[u] != cell_[u - 1]) runs_.push_back({u, cell_[u]});
+      }
+      g.run_end = static_cast<uint32_t>(runs_.size());
+      g.use_runs = g.run_end > g.run_begin && (g.end - g.begin) >= kMinMeanRun * (g.run_end - g.run_begin);
+      if (!g.use_runs) runs_.resize(g.run_begin);
+      g.run_end = static_cast<uint32_t>(runs_.size());
     }
+    runs_.shrink_to_fit();
   }
 
   BackfaceMethod method() const override { return BackfaceMethod::kMask; }
   size_t stateBytes() const override {
-    return offset_.size() + bit_.size() + groups_.size() * (sizeof(glm::dvec3) + sizeof(double)) +
-           (u_.size() + inv_len_.size()) * sizeof(double);
+    // A group with runs reads its runs instead of its per-polygon ids.
+    size_t ids = 0;
+    for (const Group& g : groups_) ids += g.use_runs ? 0 : g.end - g.begin;
+    return ids * sizeof(uint16_t) + runs_.size() * (sizeof(uint32_t) + sizeof(uint16_t)) +
+           groups_.size() * (sizeof(glm::dvec3) + sizeof(double));
   }
 
   void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
-    std::array<uint8_t, 256> mask{};
+    NormalMaskGrid::Table table;
     if (use_view_cone_) {
       const double len = glm::length(view.view_dir);
       const bool usable = len > 0.0 && std::isfinite(len) && view.fov > 0.0 && view.fov < M_PI;
-      if (usable) buildMask(view.view_dir / len, std::sin(0.5 * view.fov), mask);
-      for (const Group& g : groups_) andGroup(g, mask, unit_culled);
+      if (usable) {
+        grid_.backTable(view.view_dir / len, std::sin(0.5 * view.fov), table);
+      } else {
+        table.fill(0);
+      }
+      for (const Group& g : groups_) lookup(g, table, unit_culled);
       return;
     }
-    const double eye_scale = kSphereGrowth * std::max({std::abs(view.eye.x), std::abs(view.eye.y), std::abs(view.eye.z)});
     for (const Group& g : groups_) {
-      const glm::dvec3 to = g.center - view.eye;
-      const double dist = glm::length(to);
-      const double radius = g.radius + eye_scale;
-      if (!(dist > radius)) {  // eye inside the sphere (or NaN): every direction is possible
+      glm::dvec3 axis;
+      double sin_theta = 0.0;
+      if (!sphereCone(view.eye, g.center, g.radius, axis, sin_theta)) {
         std::fill(unit_culled.begin() + g.begin, unit_culled.begin() + g.end, uint8_t{0});
         continue;
       }
-      buildMask(to / dist, radius / dist, mask);
-      andGroup(g, mask, unit_culled);
+      grid_.backTable(axis, sin_theta, table);
+      lookup(g, table, unit_culled);
     }
   }
 
  private:
-  // §2.1: the cell of the cube face that the ray along n crosses; cell index f·N² + i·N + j.
-  int encode(const glm::dvec3& n) const {
-    const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);
-    int k = 0;
-    if (ay > ax && ay >= az) k = 1;
-    else if (az > ax && az > ay) k = 2;
-    const int a = k == 0 ? 1 : 0, b = k == 2 ? 1 : 2;
-    const double nk = n[k];
-    const int face = 2 * k + (nk < 0.0 ? 1 : 0);
-    auto index = [&](double c) {
-      const int i = static_cast<int>(std::floor((c / std::abs(nk) + 1.0) * 0.5 * n_));
-      return std::clamp(i, 0, n_ - 1);
-    };
-    if (!(std::abs(nk) > 0.0)) return kNeverCell;
-    return face * n_ * n_ + index(n[a]) * n_ + index(n[b]);
-  }
-
-  // Sets the bit of every cell whose four corners satisfy ĉ·axis > sin_theta + kCapMargin.
-  void buildMask(const glm::dvec3& axis, double sin_theta, std::array<uint8_t, 256>& mask) const {
-    mask.fill(0);
-    const size_t m = u_.size();
-    std::array<uint8_t, (kMaxResolution + 1) * (kMaxResolution + 1)> in{};
-    const double limit = sin_theta + kCapMargin;
-    for (int face = 0; face < 6; ++face) {
-      const int k = face / 2;
-      const double s = face % 2 == 0 ? 1.0 : -1.0;
-      const int a = k == 0 ? 1 : 0, b = k == 2 ? 1 : 2;
-      const double base = s * axis[k], aa = axis[a], ab = axis[b];
-      // A face's normals lie within 54.8° of its centre; a cap of radius < 90° whose axis is more
-      // than 145° away cannot reach it (cheap skip; the corner test decides everything else).
-      if (base < -0.82) continue;
-      bool any = false;
-      for (size_t i = 0; i < m; ++i) {
-        const double row = base + aa * u_[i];
-        for (size_t j = 0; j < m; ++j) {
-          const bool hit = (row + ab * u_[j]) * inv_len_[i * m + j] > limit;
-          in[i * m + j] = hit;
-          any |= hit;
-        }
+  // §3: the test per polygon, one table read (per run of equal ids where the group has runs).
+  void lookup(const Group& g, const NormalMaskGrid::Table& table, std::span<uint8_t> unit_culled) const {
+    if (g.use_runs) {
+      for (uint32_t r = g.run_begin; r < g.run_end; ++r) {
+        const uint32_t end = r + 1 < g.run_end ? runs_[r + 1].begin : g.end;
+        std::memset(unit_culled.data() + runs_[r].begin, table[runs_[r].cell], end - runs_[r].begin);
       }
-      if (!any) continue;
-      const int first = face * n_ * n_;
-      for (int i = 0; i < n_; ++i) {
-        for (int j = 0; j < n_; ++j) {
-          const size_t c = static_cast<size_t>(i) * m + static_cast<size_t>(j);
-          if (in[c] & in[c + 1] & in[c + m] & in[c + m + 1]) {
-            const int cell = first + i * n_ + j;
-            mask[static_cast<size_t>(cell >> 3)] |= static_cast<uint8_t>(1u << (cell & 7));
-          }
-        }
-      }
+      return;
     }
-  }
-
-  // §3: one AND per polygon.
-  void andGroup(const Group& g, const std::array<uint8_t, 256>& mask, std::span<uint8_t> unit_culled) const {
-    const uint8_t* off = offset_.data();
-    const uint8_t* bit = bit_.data();
+    const uint16_t* cell = cell_.data();
+    const uint8_t* t = table.data();
     uint8_t* out = unit_culled.data();
-    for (uint32_t u = g.begin; u < g.end; ++u) out[u] = (mask[off[u]] & bit[u]) != 0;
+    for (uint32_t u = g.begin; u < g.end; ++u) out[u] = t[cell[u]];
   }
 
   void split(uint32_t begin, uint32_t end, size_t group_size, const std::vector<glm::dvec3>& centroid) {
     if (end - begin <= group_size) {
-      if (end > begin) groups_.push_back({begin, end, glm::dvec3(0.0), 0.0});
+      if (end > begin) groups_.push_back(Group{begin, end});
       return;
     }
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
@@ -226,14 +310,14 @@ class NormalMaskCuller final : public BackfaceCuller {
       }
     }
     const double scale = std::max({std::abs(g.center.x), std::abs(g.center.y), std::abs(g.center.z), r});
-    g.radius = r + kSphereGrowth * scale;
+    g.radius = r + kMaskSphereGrowth * scale;
   }
 
-  int n_;
+  NormalMaskGrid grid_;
   bool use_view_cone_;
-  std::vector<double> u_, inv_len_;
   std::vector<Group> groups_;
-  std::vector<uint8_t> offset_, bit_;  // per unit: the two bytes of §2.2
+  std::vector<uint16_t> cell_;  // per unit: the 2-byte cluster id of §2.2
+  std::vector<Run> runs_;
 };
 
 }  // namespace

@@ -39,6 +39,10 @@ struct BspOptions {
   uint32_t samples = 256;
   double split_weight = 20.0;
   double coplanar_weight = 0.0;
+  // kLeastCrossed: a node set of at most this many fragments is scored exactly (every distinct
+  // plane of the set a candidate, all fragments counted) with one level of lookahead: the best
+  // next split on each side is added to a candidate's crossings (bsp_build_cgal.cpp). 0 = never.
+  uint32_t lookahead_max = 128;
 };
 
 struct BspNode {

@@ -26,6 +26,7 @@
 #include <glm/vec3.hpp>
 
 #include "bsp/bsp.h"
+#include "pfd_hfd/visibility.h"
 #include "scenes/scene.h"
 
 namespace walkvis {
@@ -45,7 +46,19 @@ struct PfdOptions {
   uint64_t max_memory = 0;
   uint32_t stat_eyes = 10000;  // random eyes in the region for tests_mean / tests_max (0: skip)
   uint64_t seed = 1;           // for those eyes
+  // HFD tree when set (must outlive the build): a fragment about to join a node's list is first
+  // tested with visibility->visibleFromRegion(fragment, node region) and dropped when hidden; a
+  // fragment hidden from a region is not tested again below it (hidden from a region => hidden
+  // from its sub-regions), and a BSP subtree whose fragments are all hidden gets no test-line.
+  const VisibilityScene* visibility = nullptr;
+  // true: lists hold only fragments front-facing for every eye of their region (facing is known at
+  // emission, DESIGN.md: the exact `region` backface method). false: back-facing fragments are
+  // listed too, where backToFront(bsp, eye, order, false) puts them, for run-time culling methods.
+  bool drop_back_faces = true;
 };
+
+enum class TreeKind : uint8_t { kPfd = 0, kHfd = 1 };
+const char* treeKindName(TreeKind kind);  // "pfd", "hfd"
 
 // Thrown when a build would exceed its memory budget.
 struct PfdBudgetError : SceneError {
@@ -69,6 +82,9 @@ struct PfdStats {
   uint64_t tests_max = 0;
   double tests_entropy_bound = 0.0;  // Σ −a·log2 a over leaf area fractions a
   double region_area = 0.0;
+  uint64_t visibility_tests = 0;   // HFD: fragment-versus-region queries
+  uint64_t visibility_rays = 0;    // HFD: occlusion rays cast
+  uint64_t hidden_rejected = 0;    // HFD: fragments dropped from a list as hidden
   uint64_t bytes = 0;             // the tree's arrays
   double build_seconds = 0.0;
 };
@@ -108,6 +124,16 @@ struct PfdTree {
 // Throws PfdBudgetError when options.max_memory is exceeded, SceneError for non-finite input.
 PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
                  const std::optional<PfdBox>& cell, const PfdOptions& options = {});
+
+// The test-lines that cross W ∩ cell (BSP node planes only) and its area: a tree's size grows
+// with the square of the crossing lines (DESIGN.md: nodes ≈ 0.25–0.34·L²), so view cells are
+// chosen by this count before anything is built.
+struct PfdLineCount {
+  uint64_t crossing = 0;
+  double area = 0.0;
+};
+PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
+                           const std::optional<PfdBox>& cell);
 
 struct PfdQueryResult {
   uint32_t tests = 0;     // plane tests made (= internal nodes on the path)
@@ -170,6 +196,8 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
 const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye);
 
 struct TreeFile {
+  TreeKind kind = TreeKind::kPfd;
+  VisibilityOptions visibility;  // kHfd: the sampling the trees were built with
   BspTree bsp;
   std::vector<PfdLevel> levels;
   double eye_height = 0.0;

@@ -12,10 +12,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <span>
 #include <unordered_map>
 
 #include "bsp/exact_sign.h"
 #include "pfd_hfd/pfd.h"
+#include "pfd_hfd/pfd_internal.h"
 
 namespace walkvis {
 namespace {
@@ -312,16 +314,28 @@ struct Item {
 };
 constexpr int8_t kEmitOn = 2;
 
+// A memoised emission of a fully resolved BSP subtree: its order depends only on the sides of the
+// lines inside it that cross the tree's whole region (every other side is the same everywhere).
+struct MemoEntry {
+  int32_t node = -1;
+  uint32_t key_first = 0;  // key_pool_[key_first, key_first + key_words): 2 bits per varying line
+  uint32_t key_words = 0;
+  uint32_t run = UINT32_MAX;  // the output run (PFD with dedup), or
+  uint32_t first = 0;         // memo_pool_[first, first + count) otherwise
+  uint32_t count = 0;
+};
+
 class Builder {
  public:
-  Builder(const BspTree& bsp, double height, const PfdOptions& options, PfdTree& out)
-      : bsp_(bsp), options_(options), out_(out) {
+  Builder(const BspTree& bsp, double height, const PfdOptions& options, const Region& root, PfdTree& out)
+      : bsp_(bsp), options_(options), out_(out), height_(height) {
     const size_t nn = bsp.nodes.size();
     lines_.reserve(nn);
     for (const BspNode& node : bsp.nodes) lines_.push_back(planeLine(node.plane, height));
     frag_line_.assign(bsp.fragments.size(), UINT32_MAX);
     for (size_t f = 0; f < bsp.fragments.size(); ++f) {
-      if (bsp.fragment_orientation[f] == 0) {
+      // Only the facing of a degenerate fragment needs its own line; keeping back faces, no line.
+      if (bsp.fragment_orientation[f] == 0 && options.drop_back_faces) {
         frag_line_[f] = static_cast<uint32_t>(lines_.size());
         lines_.push_back(planeLine(bsp.fragments[f].plane, height));
       }
@@ -361,6 +375,46 @@ class Builder {
     cross_stamp_.assign(lines_.size(), 0);
     unresolved_stamp_.assign(nn, 0);
     test_plane_.assign(lines_.size(), UINT32_MAX);
+    hidden_.assign(bsp.fragments.size(), 0);
+    // Every line is classified against the whole region once: a line that does not cross it has
+    // the same side in every sub-region, for good (never logged, never undone). Only the others
+    // ("varying") are ever classified again, so the work per node follows them, not N.
+    varying_.assign(lines_.size(), 0);
+    for (uint32_t id = 0; id < lines_.size(); ++id) {
+      const int s = classifyRegion(lines_[id], root, counters);
+      if (s == kCross) {
+        varying_[id] = 1;
+        ++varying_count;
+      } else {
+        side_[id] = static_cast<int8_t>(s);
+      }
+    }
+    // Per BSP subtree, in preorder: its varying lines and its fragments (contiguous ranges).
+    vary_range_.assign(nn, {0, 0});
+    frag_range_.assign(nn, {0, 0});
+    if (bsp.root >= 0) {
+      std::vector<std::pair<int32_t, bool>> dfs{{bsp.root, false}};
+      while (!dfs.empty()) {
+        auto [id, done] = dfs.back();
+        dfs.pop_back();
+        if (done) {
+          vary_range_[id].second = static_cast<uint32_t>(vary_list_.size());
+          frag_range_[id].second = static_cast<uint32_t>(frag_pre_.size());
+          continue;
+        }
+        const BspNode& node = bsp.nodes[id];
+        vary_range_[id].first = static_cast<uint32_t>(vary_list_.size());
+        frag_range_[id].first = static_cast<uint32_t>(frag_pre_.size());
+        if (varying_[id]) vary_list_.push_back(static_cast<uint32_t>(id));
+        for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) {
+          frag_pre_.push_back(f);
+          if (frag_line_[f] != UINT32_MAX && varying_[frag_line_[f]]) vary_list_.push_back(frag_line_[f]);
+        }
+        dfs.push_back({id, true});
+        if (node.back >= 0) dfs.push_back({node.back, false});
+        if (node.front >= 0) dfs.push_back({node.front, false});
+      }
+    }
   }
 
   void run(Region region) {
@@ -370,12 +424,17 @@ class Builder {
   }
 
   Counters counters;
+  VisibilityCounters vis_counters;
+  uint64_t hidden_rejected = 0;
+  uint64_t varying_count = 0;
   std::vector<double> leaf_areas;
   uint64_t depth_max = 0;
   uint64_t list_fragments = 0;
 
  private:
   static constexpr int8_t kUnknown = 5;
+
+  bool hfd() const { return options_.visibility != nullptr; }
 
   const Plane& linePlane(uint32_t id) const {
     if (id < bsp_.nodes.size()) return bsp_.nodes[id].plane;
@@ -398,10 +457,14 @@ class Builder {
     return s;
   }
 
-  void undo(size_t mark) {
+  void undo(size_t mark, size_t hidden_mark) {
     while (log_.size() > mark) {
       side_[log_.back()] = kUnknown;
       log_.pop_back();
+    }
+    while (hidden_log_.size() > hidden_mark) {
+      hidden_[hidden_log_.back()] = 0;
+      hidden_log_.pop_back();
     }
   }
 
@@ -412,9 +475,14 @@ class Builder {
     return UINT32_MAX;
   }
 
-  // Front-facing fragments of a node whose plane side (and degenerate fragments' sides) are known.
+  // A node's fragments whose plane side (and degenerate fragments' sides) are known, as
+  // backToFront(..., drop_back_faces) emits them: front-facing ones only, or all of them.
   void emitFragments(const BspNode& node, int s, const Region& r, std::vector<uint32_t>& out) {
     for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) {
+      if (!options_.drop_back_faces) {
+        out.push_back(f);
+        continue;
+      }
       const int8_t o = bsp_.fragment_orientation[f];
       const int fs = o != 0 ? s * o : side(frag_line_[f], r);
       if (fs > 0) out.push_back(f);
@@ -427,50 +495,201 @@ class Builder {
     near_child = s >= 0 ? node.front : node.back;
   }
 
-  // Appends the whole back-to-front emission of a subtree, or returns false (and marks the path
-  // to the first undecided line as unresolved for this region).
-  bool resolve(int32_t id, const Region& r, std::vector<uint32_t>& out) {
-    if (id < 0) return true;
+  // Whether no line inside the subtree crosses r (every varying line of it is decided).
+  bool resolved(int32_t id, const Region& r) {
     if (unresolved_stamp_[id] == region_id_) return false;
-    const BspNode& node = bsp_.nodes[id];
-    const int s = side(static_cast<uint32_t>(id), r);
-    bool ok = s != kCross;
-    if (ok) {
-      int32_t far_child, near_child;
-      children(node, s, far_child, near_child);
-      ok = resolve(far_child, r, out) && crossingFragmentLine(node, r) == UINT32_MAX;
-      if (ok) {
-        emitFragments(node, s, r, out);
-        ok = resolve(near_child, r, out);
+    const auto [b, e] = vary_range_[id];
+    for (uint32_t k = b; k < e; ++k)
+      if (side(vary_list_[k], r) == kCross) {
+        unresolved_stamp_[id] = region_id_;
+        return false;
       }
-    }
-    if (!ok) unresolved_stamp_[id] = region_id_;
-    return ok;
+    return true;
   }
 
-  void addRun(const std::vector<uint32_t>& ids) {
-    if (ids.empty()) return;
-    list_fragments += ids.size();
-    uint32_t run_id = UINT32_MAX;
-    if (options_.dedup) {
-      const uint64_t h = hashRun(ids.data(), ids.size());
-      auto [lo, hi] = run_index_.equal_range(h);
-      for (auto it = lo; it != hi; ++it) {
-        const PfdRun& run = out_.runs[it->second];
-        if (run.count == ids.size() &&
-            std::equal(ids.begin(), ids.end(), out_.fragment_ids.begin() + run.first)) {
-          run_id = it->second;
-          break;
-        }
+  // The back-to-front emission of a resolved subtree (every side known), without recursion: a
+  // degenerate BSP may be as deep as it has nodes.
+  void emitSubtree(int32_t root, const Region& r, std::vector<uint32_t>& out) {
+    walk_.clear();
+    walk_.push_back({root, 0});
+    while (!walk_.empty()) {
+      const Item item = walk_.back();
+      walk_.pop_back();
+      const BspNode& node = bsp_.nodes[item.node];
+      if (item.emit_side != 0) {
+        emitFragments(node, item.emit_side == kEmitOn ? 0 : item.emit_side, r, out);
+        continue;
       }
-      if (run_id == UINT32_MAX) {
-        run_id = newRun(ids);
-        run_index_.emplace(h, run_id);
-      }
-    } else {
-      run_id = newRun(ids);
+      const int s = side(static_cast<uint32_t>(item.node), r);
+      int32_t far_child, near_child;
+      children(node, s, far_child, near_child);
+      if (near_child >= 0) walk_.push_back({near_child, 0});
+      walk_.push_back({item.node, static_cast<int8_t>(s == 0 ? kEmitOn : s)});
+      if (far_child >= 0) walk_.push_back({far_child, 0});
     }
-    out_.run_refs.push_back(run_id);
+  }
+
+  // The emission of a resolved subtree, memoised by the sides of its varying lines. Returns the
+  // output run when one already holds it (PFD with dedup), else fills `content`.
+  uint32_t resolvedEmission(int32_t id, const Region& r, std::span<const uint32_t>& content) {
+    const auto [b, e] = vary_range_[id];
+    key_.assign((e - b + 31) / 32, 0);
+    for (uint32_t k = b; k < e; ++k) {
+      const uint64_t v = static_cast<uint64_t>(side_[vary_list_[k]] + 1) & 3;  // decided: -1, 0, +1
+      key_[(k - b) / 32] |= v << (2 * ((k - b) % 32));
+    }
+    uint64_t h = 1469598103934665603ull ^ static_cast<uint64_t>(id);
+    for (uint64_t w : key_) {
+      h = (h ^ w) * 1099511628211ull;
+      h ^= h >> 31;
+    }
+    const bool to_runs = options_.dedup && !hfd();
+    auto [lo, hi] = memo_.equal_range(h);
+    for (auto it = lo; it != hi; ++it) {
+      const MemoEntry& m = memo_entries_[it->second];
+      if (m.node == id && m.key_words == key_.size() &&
+          std::equal(key_.begin(), key_.end(), key_pool_.begin() + m.key_first)) {
+        if (to_runs) return m.run;
+        content = std::span<const uint32_t>(memo_pool_.data() + m.first, m.count);
+        return UINT32_MAX;
+      }
+    }
+    MemoEntry m;
+    m.node = id;
+    m.key_first = static_cast<uint32_t>(key_pool_.size());
+    m.key_words = static_cast<uint32_t>(key_.size());
+    key_pool_.insert(key_pool_.end(), key_.begin(), key_.end());
+    scratch_.clear();
+    emitSubtree(id, r, scratch_);
+    if (to_runs) {
+      m.run = scratch_.empty() ? kEmptyRun : findOrAddRun(scratch_);
+      memo_.emplace(h, static_cast<uint32_t>(memo_entries_.size()));
+      memo_entries_.push_back(m);
+      return m.run;
+    }
+    m.first = static_cast<uint32_t>(memo_pool_.size());
+    m.count = static_cast<uint32_t>(scratch_.size());
+    memo_pool_.insert(memo_pool_.end(), scratch_.begin(), scratch_.end());
+    memo_.emplace(h, static_cast<uint32_t>(memo_entries_.size()));
+    memo_entries_.push_back(m);
+    content = std::span<const uint32_t>(memo_pool_.data() + m.first, m.count);
+    return UINT32_MAX;
+  }
+
+  const std::vector<std::vector<glm::dvec2>>& rings(const Region& r) {
+    if (rings_stamp_ != region_id_) {
+      rings_stamp_ = region_id_;
+      rings_.clear();
+      for (const Piece& p : r) {
+        std::vector<glm::dvec2> ring;
+        ring.reserve(p.corners.size());
+        for (const Corner& k : p.corners) ring.emplace_back(k.ax, k.az);
+        rings_.push_back(std::move(ring));
+      }
+    }
+    return rings_;
+  }
+
+  void markHidden(uint32_t f) {
+    if (hidden_[f]) return;
+    hidden_[f] = 1;
+    hidden_log_.push_back(f);
+  }
+
+  // HFD: the fragments of `ids` visible from r, in order; the hidden ones are remembered for the
+  // rest of this root-to-node path and never tested again below.
+  void filterVisible(std::span<const uint32_t> ids, const Region& r, std::vector<uint32_t>& out) {
+    to_test_.clear();
+    for (uint32_t f : ids)
+      if (!hidden_[f]) to_test_.push_back(f);
+    results_.assign(to_test_.size(), 0);
+    visibleBatch(*options_.visibility, to_test_, rings(r), height_, results_, vis_counters);
+    for (size_t i = 0; i < to_test_.size(); ++i) {
+      if (results_[i]) {
+        out.push_back(to_test_[i]);
+      } else {
+        markHidden(to_test_[i]);
+        ++hidden_rejected;
+      }
+    }
+  }
+
+  // HFD: whether every fragment of `ids` is hidden from r (or back-facing for all of it when back
+  // faces are dropped), testing in fixed batches in order and stopping at the first batch with a
+  // visible one, so that the answer and what is remembered do not depend on threads.
+  bool allHidden(std::span<const uint32_t> ids, const Region& r) {
+    to_test_.clear();
+    for (uint32_t f : ids) {
+      if (hidden_[f]) continue;
+      if (options_.drop_back_faces) {
+        const int8_t o = bsp_.fragment_orientation[f];
+        const uint32_t node_line = static_cast<uint32_t>(&nodeOf(f) - bsp_.nodes.data());
+        const int s = o != 0 ? side(node_line, r) : side(frag_line_[f], r);
+        if (s != kCross && (o != 0 ? s * o : s) <= 0) continue;  // back-facing everywhere in r
+      }
+      to_test_.push_back(f);
+    }
+    constexpr size_t kBatch = 32;
+    for (size_t start = 0; start < to_test_.size(); start += kBatch) {
+      const size_t n = std::min(kBatch, to_test_.size() - start);
+      results_.assign(n, 0);
+      visibleBatch(*options_.visibility, std::span<const uint32_t>(to_test_.data() + start, n), rings(r), height_,
+                   results_, vis_counters);
+      bool any = false;
+      for (size_t i = 0; i < n; ++i) {
+        if (results_[i]) any = true;
+        else markHidden(to_test_[start + i]);
+      }
+      if (any) return false;
+    }
+    return true;
+  }
+
+  const BspNode& nodeOf(uint32_t fragment) {
+    if (frag_node_.empty()) {
+      frag_node_.assign(bsp_.fragments.size(), 0);
+      for (uint32_t n = 0; n < bsp_.nodes.size(); ++n)
+        for (uint32_t f = bsp_.nodes[n].first_fragment; f < bsp_.nodes[n].first_fragment + bsp_.nodes[n].fragment_count;
+             ++f)
+          frag_node_[f] = n;
+    }
+    return bsp_.nodes[frag_node_[fragment]];
+  }
+
+  static constexpr uint32_t kEmptyRun = UINT32_MAX - 1;
+
+  uint32_t findOrAddRun(const std::vector<uint32_t>& ids) {
+    const uint64_t h = hashRun(ids.data(), ids.size());
+    auto [lo, hi] = run_index_.equal_range(h);
+    for (auto it = lo; it != hi; ++it) {
+      const PfdRun& run = out_.runs[it->second];
+      if (run.count == ids.size() && std::equal(ids.begin(), ids.end(), out_.fragment_ids.begin() + run.first))
+        return it->second;
+    }
+    const uint32_t run_id = newRun(ids);
+    run_index_.emplace(h, run_id);
+    return run_id;
+  }
+
+  // Appends a list entry for `ids` (HFD: its visible fragments), deduplicated when asked.
+  void addRun(std::span<const uint32_t> ids, const Region& r) {
+    if (ids.empty()) return;
+    std::vector<uint32_t>& v = run_scratch_;
+    v.clear();
+    if (hfd()) {
+      filterVisible(ids, r, v);
+    } else {
+      v.assign(ids.begin(), ids.end());
+    }
+    if (v.empty()) return;
+    list_fragments += v.size();
+    out_.run_refs.push_back(options_.dedup ? findOrAddRun(v) : newRun(v));
+  }
+
+  void addRunRef(uint32_t run) {
+    if (run == kEmptyRun) return;
+    list_fragments += out_.runs[run].count;
+    out_.run_refs.push_back(run);
   }
 
   uint32_t newRun(const std::vector<uint32_t>& ids) {
@@ -480,14 +699,18 @@ class Builder {
     return id;
   }
 
+ public:
   uint64_t bytesNow() const {
-    // Arrays at their sizes, the dedup index at about 48 bytes a run (node + bucket), the undo
-    // log and scratch are small beside them.
+    // Arrays at their sizes, the hash indexes at about 48 bytes an entry (node + bucket), the
+    // memo's keys and contents; the undo logs and scratch are small beside them.
     return out_.nodes.size() * sizeof(PfdNode) + out_.run_refs.size() * sizeof(uint32_t) +
            out_.runs.size() * (sizeof(PfdRun) + (options_.dedup ? 48 : 0)) +
-           out_.fragment_ids.size() * sizeof(uint32_t) + out_.planes.size() * sizeof(Plane);
+           out_.fragment_ids.size() * sizeof(uint32_t) + out_.planes.size() * sizeof(Plane) +
+           memo_entries_.size() * (sizeof(MemoEntry) + 48) + key_pool_.size() * sizeof(uint64_t) +
+           memo_pool_.size() * sizeof(uint32_t);
   }
 
+ private:
   void checkBudget() const {
     if (options_.max_memory == 0) return;
     const uint64_t bytes = bytesNow();
@@ -499,19 +722,22 @@ class Builder {
   }
 
   // Undecided lines ahead in the traversal (the first crossing line first), for the heuristic.
+  // HFD: only from the subtree that stopped the traversal (the others may turn out hidden).
   std::vector<uint32_t> candidates(uint32_t first, const std::vector<Item>& stack, const Region& r) {
     std::vector<uint32_t> result{first};
     if (options_.heuristic == PfdHeuristic::kTraversal || options_.candidates <= 1) return result;
     std::vector<int32_t> queue;
     size_t examined = 0;
     const size_t max_examined = 8 * static_cast<size_t>(options_.candidates);
-    for (size_t k = stack.size(); k-- > 0 && result.size() < options_.candidates && examined < max_examined;) {
+    const size_t lowest = hfd() && !stack.empty() ? stack.size() - 1 : 0;
+    for (size_t k = stack.size(); k-- > lowest && result.size() < options_.candidates && examined < max_examined;) {
       if (stack[k].emit_side != 0) continue;
       queue.assign(1, stack[k].node);
       for (size_t q = 0; q < queue.size() && result.size() < options_.candidates && examined < max_examined; ++q) {
         const int32_t id = queue[q];
         if (id < 0) continue;
         ++examined;
+        if (vary_range_[id].first == vary_range_[id].second) continue;  // no line in it crosses
         const int s = side(static_cast<uint32_t>(id), r);
         if (s == kCross) {
           if (static_cast<uint32_t>(id) != first) result.push_back(static_cast<uint32_t>(id));
@@ -564,16 +790,22 @@ class Builder {
       if (item.emit_side == 0) {
         const int s = side(static_cast<uint32_t>(item.node), r);
         if (s == kCross) {
+          // HFD: a subtree hidden from the whole region needs no test-line.
+          const auto [fb, fe] = frag_range_[item.node];
+          if (hfd() && allHidden(std::span<const uint32_t>(frag_pre_.data() + fb, fe - fb), r)) {
+            stack.pop_back();
+            continue;
+          }
           crossing = static_cast<uint32_t>(item.node);
           break;
         }
-        if (options_.dedup && unresolved_stamp_[item.node] != region_id_) {
-          scratch_.clear();
-          if (resolve(item.node, r, scratch_)) {
-            stack.pop_back();
-            addRun(scratch_);
-            continue;
-          }
+        if (resolved(item.node, r)) {
+          stack.pop_back();
+          std::span<const uint32_t> content;
+          const uint32_t run = resolvedEmission(item.node, r, content);
+          if (run != UINT32_MAX) addRunRef(run);
+          else addRun(content, r);
+          continue;
         }
         stack.pop_back();
         int32_t far_child, near_child;
@@ -584,13 +816,18 @@ class Builder {
       } else {
         const uint32_t fl = crossingFragmentLine(node, r);
         if (fl != UINT32_MAX) {
+          const std::span<const uint32_t> own = nodeFragments(node);
+          if (hfd() && allHidden(own, r)) {
+            stack.pop_back();
+            continue;
+          }
           crossing = fl;
           break;
         }
         stack.pop_back();
         scratch_.clear();
         emitFragments(node, item.emit_side == kEmitOn ? 0 : item.emit_side, r, scratch_);
-        addRun(scratch_);
+        addRun(scratch_, r);
       }
     }
     out_.nodes[index].first_ref = first_ref;
@@ -607,24 +844,31 @@ class Builder {
     clipRegion(r, lines_[line], counters, &front, &back);
     r.clear();
     r.shrink_to_fit();
-    const size_t mark = log_.size();
+    const size_t mark = log_.size(), hidden_mark = hidden_log_.size();
     side_[line] = 1;
     log_.push_back(line);
     const int32_t f = build(std::move(front), stack, depth + 1);
-    undo(mark);
+    undo(mark, hidden_mark);
     side_[line] = -1;
     log_.push_back(line);
     const int32_t b = build(std::move(back), std::move(stack), depth + 1);
-    undo(mark);
+    undo(mark, hidden_mark);
     out_.nodes[index].plane = testPlaneIndex(line);
     out_.nodes[index].front = f;
     out_.nodes[index].back = b;
     return index;
   }
 
+  std::span<const uint32_t> nodeFragments(const BspNode& node) {
+    node_frags_.clear();
+    for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) node_frags_.push_back(f);
+    return node_frags_;
+  }
+
   const BspTree& bsp_;
   const PfdOptions& options_;
   PfdTree& out_;
+  double height_ = 0.0;
   std::vector<Line> lines_;         // BSP node planes [0, nodes), then degenerate fragment planes
   std::vector<uint32_t> frag_line_;  // per fragment: its own line when its orientation is 0
   std::vector<int8_t> side_;         // decided side for the current region (and its ancestors)
@@ -632,26 +876,32 @@ class Builder {
   std::vector<uint32_t> cross_stamp_;       // == region_id_: crosses the current region
   std::vector<uint32_t> unresolved_stamp_;  // == region_id_: subtree not resolved in the current region
   std::vector<uint32_t> test_plane_;
-  std::vector<uint32_t> scratch_;
+  std::vector<uint8_t> varying_;     // the line crosses the tree's whole region
+  std::vector<uint32_t> vary_list_, frag_pre_;
+  std::vector<std::pair<uint32_t, uint32_t>> vary_range_, frag_range_;
+  std::vector<uint8_t> hidden_;      // HFD: hidden from an ancestor region on the current path
+  std::vector<uint32_t> hidden_log_;
+  std::vector<uint32_t> frag_node_;
+  std::vector<uint32_t> scratch_, run_scratch_, to_test_, node_frags_;
+  std::vector<uint8_t> results_;
+  std::vector<Item> walk_;
+  std::vector<uint64_t> key_, key_pool_;
+  std::vector<uint32_t> memo_pool_;
+  std::vector<MemoEntry> memo_entries_;
+  std::unordered_multimap<uint64_t, uint32_t> memo_;
   std::unordered_multimap<uint64_t, uint32_t> run_index_;
+  std::vector<std::vector<glm::dvec2>> rings_;
+  uint32_t rings_stamp_ = 0;
   uint32_t region_id_ = 0, region_counter_ = 0;
 };
 
 bool finite2(const glm::dvec2& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 
-}  // namespace
-
-PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                 const std::optional<PfdBox>& cell, const PfdOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
+// W's convex pieces clipped to the cell, with exact corners; zero-area pieces dropped.
+Region makeRegion(std::span<const std::vector<glm::dvec2>> walkable, const std::optional<PfdBox>& cell,
+                  Counters& counters) {
   if (cell && !(finite2(cell->lo) && finite2(cell->hi) && cell->lo.x < cell->hi.x && cell->lo.y < cell->hi.y))
     throw SceneError("pfd: view cell is not a finite box with lo < hi");
-  PfdTree tree;
-  tree.height = height;
-  tree.cell = cell;
-
-  Counters counters;
   Region region;
   for (const auto& ring : walkable) {
     Piece p;
@@ -687,6 +937,44 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
       region = std::move(clipped);
     }
   }
+  return region;
+}
+
+}  // namespace
+
+const char* treeKindName(TreeKind kind) {
+  switch (kind) {
+    case TreeKind::kPfd:
+      return "pfd";
+    case TreeKind::kHfd:
+      return "hfd";
+  }
+  return "unknown";
+}
+
+PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
+                           const std::optional<PfdBox>& cell) {
+  if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
+  Counters counters;
+  const Region region = makeRegion(walkable, cell, counters);
+  PfdLineCount count;
+  for (const Piece& p : region) count.area += pieceArea(p);
+  if (region.empty()) return count;
+  for (const BspNode& node : bsp.nodes)
+    if (classifyRegion(planeLine(node.plane, height), region, counters) == kCross) ++count.crossing;
+  return count;
+}
+
+PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
+                 const std::optional<PfdBox>& cell, const PfdOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
+  PfdTree tree;
+  tree.height = height;
+  tree.cell = cell;
+
+  Counters counters;
+  Region region = makeRegion(walkable, cell, counters);
   for (const Piece& p : region) {
     std::vector<glm::dvec2> ring;
     for (const Corner& k : p.corners) ring.emplace_back(k.ax, k.az);
@@ -694,14 +982,15 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
     tree.stats.region_area += pieceArea(p);
   }
 
-  Builder builder(bsp, height, options, tree);
-  builder.run(std::move(region));
+  Builder builder(bsp, height, options, region, tree);
+  if (!region.empty()) builder.run(std::move(region));
+  else tree.nodes.push_back({});
 
   PfdStats& s = tree.stats;
   s.fragments = bsp.fragments.size();
   s.nodes = tree.nodes.size();
-  s.leaves = builder.leaf_areas.size();
-  s.depth_max = builder.depth_max - 1;
+  s.leaves = std::max<uint64_t>(1, builder.leaf_areas.size());
+  s.depth_max = builder.depth_max > 0 ? builder.depth_max - 1 : 0;
   s.list_entries = tree.run_refs.size();
   s.list_fragments = builder.list_fragments;
   s.pool_entries = tree.fragment_ids.size();
@@ -710,6 +999,9 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.exact_fallbacks = counters.exact_fallbacks + builder.counters.exact_fallbacks;
   s.touching = builder.counters.touching;
   s.decisions = builder.counters.decisions;
+  s.visibility_tests = builder.vis_counters.tests;
+  s.visibility_rays = builder.vis_counters.rays;
+  s.hidden_rejected = builder.hidden_rejected;
   double entropy = 0.0;
   if (s.region_area > 0.0) {
     for (double a : builder.leaf_areas) {

@@ -3,11 +3,12 @@
 //
 // Layout (little-endian, fields one by one, no padding):
 //   header  : magic "WVPFD\r\n\x1a" (8), u32 version, u32 0, u64 payload bytes, u64 FNV-1a 64 of the payload
-//   payload : f64 eye_height, u64 BSP bytes + the BSP file (saveBsp's format, checked by loadBspFromMemory),
+//   payload : f64 eye_height, u8 kind (0 pfd, 1 hfd), u32 region_samples, u32 polygon_samples,
+//             u32 refine_rays, u64 seed, u64 BSP bytes + the BSP file (saveBsp's format, checked by loadBspFromMemory),
 //             u32 levels; per level: u32 level, f64 floor_y, f64 height, u32 cells; per cell (tree):
 //             f64 height, u8 has_cell, 4 f64 cell box, u32 pieces (u32 corners, 2 f64 each),
 //             u32 planes (4 f64), u32 nodes (u32 plane, i32 front, i32 back, u32 first_ref, u32 ref_count),
-//             u32 run_refs (u32), u32 runs (2 u32), u32 fragment_ids (u32), stats (13 u64, 5 f64).
+//             u32 run_refs (u32), u32 runs (2 u32), u32 fragment_ids (u32), stats (16 u64, 5 f64).
 // Loading checks everything a query relies on: children after their parent, plane, run and
 // fragment indices in range, so that a loaded tree is queried without further checks.
 #include <cmath>
@@ -24,7 +25,8 @@ namespace walkvis {
 namespace {
 
 constexpr char kMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
-constexpr uint32_t kVersion = 1;
+// 2: tree kind and visibility sampling after eye_height; HFD counters in the stats.
+constexpr uint32_t kVersion = 2;
 constexpr size_t kHeaderBytes = 32;
 
 using Writer = ByteWriter;
@@ -93,7 +95,8 @@ void writeTree(Writer& w, const PfdTree& t) {
   for (uint32_t f : t.fragment_ids) w.put(f);
   const PfdStats& s = t.stats;
   for (uint64_t v : {s.fragments, s.nodes, s.leaves, s.depth_max, s.list_entries, s.list_fragments, s.pool_entries,
-                     s.runs, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max})
+                     s.runs, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max, s.visibility_tests,
+                     s.visibility_rays, s.hidden_rejected})
     w.put(v);
   for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, 0.0}) w.put(v);
 }
@@ -152,7 +155,7 @@ PfdTree readTree(Reader& r, size_t fragments) {
   PfdStats& s = t.stats;
   for (uint64_t* v : {&s.fragments, &s.nodes, &s.leaves, &s.depth_max, &s.list_entries, &s.list_fragments,
                       &s.pool_entries, &s.runs, &s.test_planes, &s.exact_fallbacks, &s.touching, &s.decisions,
-                      &s.tests_max})
+                      &s.tests_max, &s.visibility_tests, &s.visibility_rays, &s.hidden_rejected})
     *v = r.get<uint64_t>();
   double unused = 0.0;
   for (double* v : {&s.tests_mean, &s.tests_entropy_bound, &s.region_area, &s.build_seconds, &unused})
@@ -203,6 +206,11 @@ void saveTreeFile(const TreeFile& file, const std::string& path) {
 
   Writer w;
   w.put(file.eye_height);
+  w.put(static_cast<uint8_t>(file.kind));
+  w.put(file.visibility.region_samples);
+  w.put(file.visibility.polygon_samples);
+  w.put(file.visibility.refine_rays);
+  w.put(file.visibility.seed);
   w.put(static_cast<uint64_t>(bsp_bytes.size()));
   w.bytes.insert(w.bytes.end(), bsp_bytes.begin(), bsp_bytes.end());
   w.put(static_cast<uint32_t>(file.levels.size()));
@@ -258,6 +266,13 @@ TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::strin
   Reader r{payload, 0, context};
   TreeFile file;
   file.eye_height = r.getFinite();
+  const uint8_t kind = r.get<uint8_t>();
+  if (kind > 1) r.fail("unknown tree kind " + std::to_string(kind));
+  file.kind = static_cast<TreeKind>(kind);
+  file.visibility.region_samples = r.get<uint32_t>();
+  file.visibility.polygon_samples = r.get<uint32_t>();
+  file.visibility.refine_rays = r.get<uint32_t>();
+  file.visibility.seed = r.get<uint64_t>();
   const uint64_t bsp_size = r.get<uint64_t>();
   if (bsp_size > payload.size() - r.pos) r.fail("truncated tree file (BSP part)");
   file.bsp = loadBspFromMemory(payload.subspan(r.pos, bsp_size), context + " (BSP part)");

@@ -1,15 +1,36 @@
-// One level's PFD trees and its view cells: a level whose tree would exceed the per-cell budget is
-// cut into four boxes, recursively, each with its own tree (DESIGN.md, "Height plane": "a large
-// level is divided into view cells rather than given one giant tree"; the sizes that make this
-// necessary are in "What is already known").
+// One level's PFD trees and its view cells (DESIGN.md, "Height plane": "a large level is divided
+// into view cells rather than given one giant tree"; the sizes that make this necessary are in
+// "What is already known"). Cells are chosen before anything is built: a tree's size grows with
+// the square of the test-lines that cross its region (nodes ≈ 0.25–0.34·L²), so a cell is cut in
+// four while that estimate exceeds the per-cell budget. A cell whose build still passes the budget
+// is abandoned at once (the builder checks after every node) and cut again. The cells of a level
+// are built in parallel (TBB); the result does not depend on thread order.
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <mutex>
 
 #include <glm/common.hpp>
+#include <tbb/parallel_for.h>
 
 #include "pfd_hfd/pfd.h"
 
 namespace walkvis {
+namespace {
+
+// Bytes per crossing line squared: about 0.3·L² nodes of about 200 bytes each (node, list
+// references, pooled runs and the build's memo), measured on gen:office and freedoom2 maps.
+constexpr double kBytesPerLineSquared = 60.0;
+// Hidden-subtree pruning shrinks trees 5–30× in nodes (DESIGN.md): HFD cells are planned larger.
+constexpr double kHfdShrink = 8.0;
+
+struct PlannedCell {
+  std::optional<PfdBox> box;  // none: the whole level
+  uint32_t depth = 0;
+};
+
+}  // namespace
 
 PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
                        const PfdLevelOptions& options, uint64_t& used_bytes,
@@ -19,6 +40,12 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
   out.floor_y = level.floor_y;
   out.height = level.floor_y + eye_height;
   const std::string where = "level " + std::to_string(level_index) + " (floor y=" + std::to_string(level.floor_y) + ")";
+  std::mutex progress_mutex;
+  auto say = [&](const std::string& line) {
+    if (!progress) return;
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    progress(line);
+  };
 
   // The cell boxes are half-open [lo, hi): hi lies just above every walkable corner.
   PfdBox bounds{{HUGE_VAL, HUGE_VAL}, {-HUGE_VAL, -HUGE_VAL}};
@@ -31,50 +58,97 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
   bounds.hi.x = std::nextafter(bounds.hi.x, HUGE_VAL);
   bounds.hi.y = std::nextafter(bounds.hi.y, HUGE_VAL);
 
-  auto buildCell = [&](auto& self, const std::optional<PfdBox>& box, uint32_t depth) -> void {
-    const uint64_t remaining = options.max_memory == 0 ? 0
-                               : used_bytes >= options.max_memory ? 1
-                                                                  : options.max_memory - used_bytes;
-    PfdOptions o = options.tree;
-    o.max_memory = options.cell_memory;
-    bool total_limits = false;
-    if (remaining != 0 && (o.max_memory == 0 || remaining < o.max_memory)) {
-      o.max_memory = remaining;
-      total_limits = true;
+  // The four quarters of a cell, or nothing when it cannot be cut (depth or floating point).
+  auto quarters = [&](const PlannedCell& c, std::vector<PlannedCell>& q) {
+    q.clear();
+    const PfdBox b = c.box ? *c.box : bounds;
+    const double mx = b.lo.x + 0.5 * (b.hi.x - b.lo.x), mz = b.lo.y + 0.5 * (b.hi.y - b.lo.y);
+    if (c.depth >= options.max_cell_depth || !(mx > b.lo.x && mx < b.hi.x && mz > b.lo.y && mz < b.hi.y)) return;
+    q.push_back({PfdBox{{b.lo.x, b.lo.y}, {mx, mz}}, c.depth + 1});
+    q.push_back({PfdBox{{mx, b.lo.y}, {b.hi.x, mz}}, c.depth + 1});
+    q.push_back({PfdBox{{b.lo.x, mz}, {mx, b.hi.y}}, c.depth + 1});
+    q.push_back({PfdBox{{mx, mz}, {b.hi.x, b.hi.y}}, c.depth + 1});
+  };
+  const double per_line2 = kBytesPerLineSquared / (options.tree.visibility ? kHfdShrink : 1.0);
+
+  // Plan: depth first, so that the cells keep a fixed quadrant order.
+  std::vector<PlannedCell> planned;
+  {
+    std::vector<PlannedCell> stack{{std::nullopt, 0}}, q;
+    while (!stack.empty()) {
+      const PlannedCell c = stack.back();
+      stack.pop_back();
+      const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box);
+      if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
+      const double estimate = per_line2 * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
+      if (options.cell_memory != 0 && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
+      else q.clear();
+      if (q.empty()) {
+        planned.push_back(c);
+      } else {
+        for (size_t k = q.size(); k-- > 0;) stack.push_back(q[k]);
+      }
     }
-    PfdTree tree;
-    try {
-      tree = buildPfd(bsp, level.walkable, out.height, box, o);
-    } catch (const PfdBudgetError& e) {
-      if (total_limits)
-        throw PfdBudgetError("pfd: " + where + ": the trees exceed the memory budget of " +
-                             std::to_string(options.max_memory) + " bytes; raise --max-memory");
-      const PfdBox b = box ? *box : bounds;
-      const double mx = b.lo.x + 0.5 * (b.hi.x - b.lo.x), mz = b.lo.y + 0.5 * (b.hi.y - b.lo.y);
-      if (depth >= options.max_cell_depth || !(mx > b.lo.x && mx < b.hi.x && mz > b.lo.y && mz < b.hi.y))
+  }
+  if (planned.size() > 1) say(where + ": " + std::to_string(planned.size()) + " view cells planned");
+
+  // Build, in rounds: a cell over its budget is replaced by its quarters and built again.
+  std::atomic<uint64_t> used{used_bytes};
+  auto totalError = [&] {
+    return PfdBudgetError("pfd: " + where + ": the trees exceed the memory budget of " +
+                          std::to_string(options.max_memory) + " bytes; raise --max-memory");
+  };
+  std::vector<std::optional<PfdTree>> built;
+  while (!planned.empty()) {
+    built.assign(planned.size(), std::nullopt);
+    std::vector<uint8_t> over(planned.size(), 0);
+    std::vector<uint8_t> total_limited(planned.size(), 0);
+    tbb::parallel_for(size_t{0}, planned.size(), [&](size_t i) {
+      const uint64_t now = used.load();
+      const uint64_t remaining = options.max_memory == 0 ? 0
+                                 : now >= options.max_memory ? 1
+                                                             : options.max_memory - now;
+      PfdOptions o = options.tree;
+      o.max_memory = options.cell_memory;
+      if (remaining != 0 && (o.max_memory == 0 || remaining < o.max_memory)) {
+        o.max_memory = remaining;
+        total_limited[i] = 1;
+      }
+      try {
+        PfdTree tree = buildPfd(bsp, level.walkable, out.height, planned[i].box, o);
+        const uint64_t after = used.fetch_add(tree.stats.bytes) + tree.stats.bytes;
+        if (options.max_memory != 0 && after > options.max_memory) throw totalError();
+        say(where + ": cell " + std::to_string(i) + "/" + std::to_string(planned.size()) + ": " +
+            std::to_string(tree.stats.nodes) + " nodes, " + std::to_string(tree.stats.list_entries) + " list entries, " +
+            std::to_string(tree.stats.pool_entries) + " pooled ids, " + std::to_string(tree.stats.bytes) + " bytes, " +
+            std::to_string(tree.stats.build_seconds) + " s");
+        built[i] = std::move(tree);
+      } catch (const PfdBudgetError&) {
+        if (total_limited[i] && options.max_memory != 0) throw totalError();
+        over[i] = 1;
+      }
+    });
+    std::vector<PlannedCell> again, q;
+    for (size_t i = 0; i < planned.size(); ++i) {
+      if (built[i]) {
+        if (!built[i]->region.empty()) out.cells.push_back(std::move(*built[i]));
+        continue;
+      }
+      if (!over[i]) continue;
+      quarters(planned[i], q);
+      const PfdBox b = planned[i].box ? *planned[i].box : bounds;
+      if (q.empty())
         throw PfdBudgetError("pfd: " + where + ": a view cell of " + std::to_string(b.hi.x - b.lo.x) + " x " +
                              std::to_string(b.hi.y - b.lo.y) + " still needs more than " +
-                             std::to_string(options.cell_memory) + " bytes after " + std::to_string(depth) +
-                             " subdivisions; raise --max-memory");
-      if (progress) progress(where + ": cell over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
-      self(self, PfdBox{{b.lo.x, b.lo.y}, {mx, mz}}, depth + 1);
-      self(self, PfdBox{{mx, b.lo.y}, {b.hi.x, mz}}, depth + 1);
-      self(self, PfdBox{{b.lo.x, mz}, {mx, b.hi.y}}, depth + 1);
-      self(self, PfdBox{{mx, mz}, {b.hi.x, b.hi.y}}, depth + 1);
-      return;
+                             std::to_string(options.cell_memory) + " bytes after " +
+                             std::to_string(planned[i].depth) + " subdivisions; raise --cell-memory or --max-memory");
+      say(where + ": a cell went over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
+      for (const PlannedCell& c : q)
+        if (countPfdLines(bsp, level.walkable, out.height, c.box).area > 0.0) again.push_back(c);
     }
-    if (tree.region.empty()) return;  // no walkable area in this cell
-    used_bytes += tree.stats.bytes;
-    if (options.max_memory != 0 && used_bytes > options.max_memory)
-      throw PfdBudgetError("pfd: " + where + ": the trees exceed the memory budget of " +
-                           std::to_string(options.max_memory) + " bytes; raise --max-memory");
-    if (progress)
-      progress(where + ": cell " + std::to_string(out.cells.size()) + ": " + std::to_string(tree.stats.nodes) +
-               " nodes, " + std::to_string(tree.stats.bytes) + " bytes, " +
-               std::to_string(tree.stats.build_seconds) + " s");
-    out.cells.push_back(std::move(tree));
-  };
-  buildCell(buildCell, std::nullopt, 0);
+    planned = std::move(again);
+  }
+  used_bytes = used.load();
   return out;
 }
 

@@ -10,38 +10,19 @@
 #include <gtest/gtest.h>
 
 #include "backface/backface.h"
+#include "backface_test_util.h"
 #include "scenes/scene.h"
 
 namespace walkvis {
 namespace {
 
-constexpr int kEyes = 10000;
+using backface_test::Frame;
+using backface_test::frameOf;
+using backface_test::randomEye;
+using backface_test::randomSoup;
+using backface_test::randomUnit;
 
-// Random triangles and quads of every orientation in [-1, 1]³, some coplanar pairs facing
-// opposite ways, some far from the origin.
-Scene randomSoup(uint64_t seed, int count) {
-  Scene s;
-  s.name = "soup";
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int i = 0; i < count; ++i) {
-    const glm::dvec3 c(u(rng), u(rng), u(rng));
-    const glm::dvec3 a = c + 0.2 * glm::dvec3(u(rng), u(rng), u(rng));
-    const glm::dvec3 b = c + 0.2 * glm::dvec3(u(rng), u(rng), u(rng));
-    const glm::dvec3 d = c + 0.2 * glm::dvec3(u(rng), u(rng), u(rng));
-    if (i % 7 == 0) {
-      // A parallelogram and its reverse: coplanar, both orientations.
-      const glm::dvec3 quad[] = {a, b, b + d - a, d};
-      const glm::dvec3 back[] = {d, b + d - a, b, a};
-      addFace(s, quad, 0, "soup");
-      addFace(s, back, 0, "soup");
-    } else {
-      const glm::dvec3 tri[] = {a, b, d};
-      addFace(s, tri, 0, "soup");
-    }
-  }
-  return s;
-}
+constexpr int kEyes = 10000;
 
 struct MethodSetup {
   std::string label;
@@ -66,34 +47,9 @@ std::vector<MethodSetup> methodSetups() {
   return out;
 }
 
-glm::dvec3 randomUnit(std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  glm::dvec3 v(g(rng), g(rng), g(rng));
-  return glm::normalize(v);
-}
-
-// Eyes: a third inside the bounding box, a third near (1–3 radii from the centre), a sixth far
-// (3–30 radii), a sixth within 1e-12..1e-2 of a polygon's plane on either side (where the
-// floating point decides).
-glm::dvec3 randomEye(const Scene& s, std::mt19937_64& rng, const glm::dvec3& center, double radius) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const double pick = u(rng);
-  if (pick < 1.0 / 3.0) return center + radius * glm::dvec3(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1);
-  if (pick < 2.0 / 3.0) return center + radius * (1.0 + 2.0 * u(rng)) * randomUnit(rng);
-  if (pick < 5.0 / 6.0) return center + radius * (3.0 + 27.0 * u(rng)) * randomUnit(rng);
-  const Polygon& p = s.polygons[static_cast<size_t>(u(rng) * static_cast<double>(s.polygons.size())) % s.polygons.size()];
-  glm::dvec3 c(0.0);
-  for (const auto& v : s.polygonVertices(p)) c += v;
-  c /= static_cast<double>(p.vertex_count);
-  const double offset = std::pow(10.0, -12.0 + 10.0 * u(rng)) * (u(rng) < 0.5 ? -1.0 : 1.0);
-  return c + offset * radius * p.plane.n;
-}
-
 void expectConservative(const Scene& s, uint64_t seed) {
   ASSERT_FALSE(s.polygons.empty());
-  const Bounds b = sceneBounds(s);
-  const glm::dvec3 center = 0.5 * (b.lo + b.hi);
-  const double radius = 0.5 * glm::length(b.hi - b.lo);
+  const Frame f = frameOf(s);
   for (const MethodSetup& setup : methodSetups()) {
     SCOPED_TRACE(s.name + " " + setup.label);
     const auto culler = makeBackfaceCuller(setup.method, backfaceInput(s), setup.options);
@@ -104,7 +60,7 @@ void expectConservative(const Scene& s, uint64_t seed) {
     uint64_t false_culls = 0, culled_total = 0, back_total = 0;
     for (int e = 0; e < kEyes; ++e) {
       BackfaceView view;
-      view.eye = randomEye(s, rng, center, radius);
+      view.eye = randomEye(s, rng, f);
       view.view_dir = randomUnit(rng);
       view.fov = (20.0 + 130.0 * u(rng)) * M_PI / 180.0;
       culler->cull(view, units);
@@ -165,17 +121,56 @@ TEST(Backface, InwardDomeNoFrontFaceCulled) { expectConservative(loadScene("gen:
 TEST(Backface, SoupNoFrontFaceCulled) { expectConservative(randomSoup(14, 400), 14); }
 
 // Far from the origin with small features: the margins must scale with the coordinates.
-TEST(Backface, FarFromOriginNoFrontFaceCulled) {
-  Scene s = loadScene("gen:sphere?tris=500&radius=0.01");
-  for (auto& v : s.vertices) v += glm::dvec3(1e6, -2e5, 3e5);
-  for (auto& p : s.polygons) p.plane = newellPlane(s.polygonVertices(p));
-  s.name = "sphere far from the origin";
-  expectConservative(s, 15);
-}
+TEST(Backface, FarFromOriginNoFrontFaceCulled) { expectConservative(backface_test::farFromOriginSphere(), 15); }
 
 TEST(Backface, SphereCullsFromFarAway) { expectEffectiveFarAway(loadScene("gen:sphere")); }
 TEST(Backface, DomeCullsFromFarAway) { expectEffectiveFarAway(loadScene("gen:dome")); }
 TEST(Backface, SoupCullsFromFarAway) { expectEffectiveFarAway(randomSoup(16, 400), true); }
+
+// The peer's only "false culls" are zero-area polygons (points, segments: BSP fragments of Freedoom
+// MAP01 are like that): meshoptimizer skips their triangles and trivially rejects a meshlet of only
+// such, for every eye. coneInvisiblePolygons names exactly those; every cone cull of a front face
+// is one of them, and the meshlets of the sphere's real triangles cull no front face.
+TEST(Backface, ConeCullsFrontFacesOnlyOfZeroArea) {
+  Scene s = loadScene("gen:sphere?tris=300");
+  const size_t real = s.polygons.size();
+  std::mt19937_64 rng(71);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int i = 0; i < 40; ++i) {
+    const glm::dvec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng));
+    Polygon p;
+    p.first_vertex = static_cast<uint32_t>(s.vertices.size());
+    p.vertex_count = 3 + static_cast<uint32_t>(i % 2);
+    // Even: a point; odd: a segment a-b-b-a. Any plane through a.
+    for (uint32_t k = 0; k < p.vertex_count; ++k) s.vertices.push_back(i % 2 == 0 || k == 0 || k == 3 ? a : b);
+    p.plane.n = randomUnit(rng);
+    p.plane.d = glm::dot(p.plane.n, a);
+    s.polygons.push_back(p);
+  }
+  const BackfaceInput input = backfaceInput(s);
+  std::vector<uint8_t> invisible(s.polygons.size());
+  coneInvisiblePolygons(input, invisible);
+  for (size_t p = 0; p < s.polygons.size(); ++p) EXPECT_EQ(invisible[p], p >= real ? 1 : 0) << p;
+  std::vector<uint8_t> too_short(1);
+  EXPECT_THROW(coneInvisiblePolygons(input, too_short), SceneError);
+
+  const auto culler = makeBackfaceCuller(BackfaceMethod::kCone, input);
+  std::vector<uint8_t> units(culler->unitCount()), culled(s.polygons.size());
+  const Frame f = frameOf(s);
+  uint64_t visible_false = 0, invisible_false = 0;
+  for (int e = 0; e < 2000; ++e) {
+    const glm::dvec3 eye = randomEye(s, rng, f);
+    culler->cull(BackfaceView{eye}, units);
+    expandToPolygons(*culler, units, culled);
+    for (size_t p = 0; p < s.polygons.size(); ++p) {
+      const bool wrong = culled[p] && isFrontFacing(s.polygons[p].plane, eye);
+      (invisible[p] ? invisible_false : visible_false) += wrong;
+    }
+  }
+  EXPECT_EQ(visible_false, 0u);
+  // The library's trivial reject: some zero-area polygon is culled while its plane faces the eye.
+  EXPECT_GT(invisible_false, 0u);
+}
 
 // The paper's §3.1 view cone is conservative for polygons inside the view cone.
 TEST(Backface, MaskViewConeKeepsFrontFacesInsideTheCone) {
@@ -230,6 +225,44 @@ TEST(Backface, NearFieldProbabilityMatchesMonteCarlo) {
       hits += lhs <= 0.0;
     }
     EXPECT_NEAR(nearFieldCullProbability(lo, hi, d, 1.0), static_cast<double>(hits) / kSamples, 0.01) << trial;
+  }
+}
+
+// The probability over a fixed eye box (walkthroughs), boxes on both sides of b, straddling it,
+// and flat (an eye height plane): against sampling, and equal to the paper's near field for the
+// cube [-half, half]³.
+TEST(Backface, BoxProbabilityMatchesMonteCarlo) {
+  EXPECT_NEAR(boxCullProbability({0, 0, 1}, {0, 0, 1}, 0.0, {-1, -1, -1}, {1, 1, 1}), 0.5, 1e-12);
+  EXPECT_NEAR(boxCullProbability({0, 0, 1}, {0, 0, 1}, 0.0, {-1, -1, 1}, {1, 1, 3}), 0.0, 1e-12);
+  EXPECT_NEAR(boxCullProbability({1, 0, 0}, {1, 0, 0}, 0.0, {-3, 0, 0}, {1, 0, 2}), 0.75, 1e-12);  // flat in y
+  std::mt19937_64 rng(19);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 30; ++trial) {
+    glm::dvec3 n1 = randomUnit(rng), n2 = randomUnit(rng);
+    n2 = glm::normalize(n1 + 0.5 * n2);
+    const glm::dvec3 nlo = glm::min(n1, n2), nhi = glm::max(n1, n2);
+    const double d = 0.5 * u(rng);
+    glm::dvec3 lo(u(rng), u(rng), u(rng)), hi(u(rng), u(rng), u(rng));
+    const glm::dvec3 a = glm::min(lo, hi), b = glm::max(lo, hi);
+    lo = a;
+    hi = b;
+    if (trial % 3 == 0) hi.y = lo.y;  // flat
+    if (trial % 5 == 0) {
+      lo = glm::dvec3(-0.7);
+      hi = glm::dvec3(0.7);
+      EXPECT_NEAR(boxCullProbability(nlo, nhi, d, lo, hi), nearFieldCullProbability(nlo, nhi, d, 0.7), 1e-9) << trial;
+    }
+    std::uniform_real_distribution<double> ux(lo.x, hi.x), uz(lo.z, hi.z);
+    std::uniform_real_distribution<double> uy(lo.y, hi.y > lo.y ? hi.y : std::nextafter(lo.y, INFINITY));
+    int hits = 0;
+    constexpr int kSamples = 40000;
+    for (int k = 0; k < kSamples; ++k) {
+      const glm::dvec3 e(ux(rng), hi.y > lo.y ? uy(rng) : lo.y, uz(rng));
+      double lhs = -d;
+      for (int c = 0; c < 3; ++c) lhs += (e[c] > 0.0 ? nhi[c] : nlo[c]) * e[c];
+      hits += lhs <= 0.0;
+    }
+    EXPECT_NEAR(boxCullProbability(nlo, nhi, d, lo, hi), static_cast<double>(hits) / kSamples, 0.01) << trial;
   }
 }
 

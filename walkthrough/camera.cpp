@@ -3,6 +3,7 @@
 #include "walkthrough/camera.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace walkvis {
 
@@ -45,6 +46,37 @@ std::array<float, 16> clipFromEyeRelative(const View& view) {
   set(1, row1, 0.0);
   set(2, row2, B);
   set(3, row3, 0.0);
+  return m;
+}
+
+}  // namespace walkvis
+
+namespace walkvis {
+
+// FreeCamera: yaw about +y (0 looks along -z, positive towards -x), pitch up; a standard OpenGL
+// perspective with the vertical field of view fov_y and the image's aspect ratio.
+std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera) {
+  const double cp = std::cos(camera.pitch), sp = std::sin(camera.pitch);
+  const double cy = std::cos(camera.yaw), sy = std::sin(camera.yaw);
+  const glm::dvec3 forward(-sy * cp, sp, -cy * cp);
+  const glm::dvec3 right(cy, 0.0, -sy);  // forward × +y, normalised (pitch does not tilt it)
+  const glm::dvec3 up(sy * sp, cp, cy * sp);  // right × forward
+  const double f = 1.0 / std::tan(0.5 * camera.fov_y);
+  const double aspect = static_cast<double>(camera.width) / static_cast<double>(camera.height);
+  const double n = camera.near, fa = camera.far;
+  const double A = (fa + n) / (n - fa);
+  const double B = 2.0 * fa * n / (n - fa);
+  std::array<float, 16> m{};
+  auto set = [&](int row, const glm::dvec3& r, double w) {
+    m[0 * 4 + row] = static_cast<float>(r.x);
+    m[1 * 4 + row] = static_cast<float>(r.y);
+    m[2 * 4 + row] = static_cast<float>(r.z);
+    m[3 * 4 + row] = static_cast<float>(w);
+  };
+  set(0, (f / aspect) * right, 0.0);
+  set(1, f * up, 0.0);
+  set(2, -A * forward, B);
+  set(3, forward, 0.0);
   return m;
 }
 

@@ -42,3 +42,20 @@ glm::dvec3 pixelRay(const View& view, int i, int j);
 std::array<float, 16> clipFromEyeRelative(const View& view);
 
 }  // namespace walkvis
+
+namespace walkvis {
+
+// A person's perspective view (the window and the camera paths), rather than a cube face.
+struct FreeCamera {
+  glm::dvec3 eye{0.0};
+  double yaw = 0.0;    // camera_path.h conventions
+  double pitch = 0.0;
+  double fov_y = 1.2217304763960306;  // 70 degrees, full vertical angle
+  int width = 640, height = 480;      // pixels, > 0
+  double near = 0.05, far = 1e4;      // camera depth, 0 < near < far
+};
+
+// Column-major clip matrix for positions relative to the eye (p - eye), as clipFromEyeRelative(View).
+std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera);
+
+}  // namespace walkvis

@@ -74,6 +74,7 @@ void writeDiffImage(const std::string& path, int size, const Scene& scene, std::
       case PixelClass::kTie: c = 0x00FFFF; break;
       case PixelClass::kEdge: c = 0xFFFF00; break;
       case PixelClass::kUncovered: c = 0xFF00FF; break;
+      case PixelClass::kMissed: c = 0xFF8000; break;
       case PixelClass::kMatch:
         if (ids[k] < polygons.size()) {
           // Dimmed face colour, so the highlighted classes stand out.
@@ -101,19 +102,37 @@ bool isConvex(std::span<const glm::dvec3> verts, const Plane& plane) {
 
 }  // namespace
 
-PixelClass classifyPixel(uint32_t shown, std::span<const RayHit> hits, double tie_tolerance) {
+PixelClass classifyPixel(uint32_t shown, std::span<const RayHit> hits, double tie_tolerance,
+                         std::span<const uint8_t> listed) {
   if (hits.empty()) return shown == kNoPolygon ? PixelClass::kMatch : PixelClass::kEdge;
+  const auto is_listed = [&](const RayHit& h) {
+    return listed.empty() || (h.polygon < listed.size() && listed[h.polygon] != 0);
+  };
+  // Missed: nothing in the nearest tie group is listed.
+  auto first = hits.begin();
+  if (!listed.empty()) {
+    const double window0 = tie_tolerance * hits[0].t;
+    while (first != hits.end() && !is_listed(*first)) {
+      if (first->t - hits[0].t > window0) return PixelClass::kMissed;
+      ++first;
+    }
+    if (first == hits.end()) return PixelClass::kMissed;
+  }
+  // From here on only listed hits count.
   if (shown == kNoPolygon) return PixelClass::kUncovered;
-  const auto it = std::find_if(hits.begin(), hits.end(), [&](const RayHit& h) { return h.polygon == shown; });
+  const auto it = std::find_if(first, hits.end(), [&](const RayHit& h) { return h.polygon == shown; });
   if (it == hits.end()) return PixelClass::kEdge;
-  const double t_min = hits[0].t;
+  const double t_min = first->t;
   const double window = tie_tolerance * t_min;
   if (it->t - t_min > window) {
-    for (auto h = hits.begin(); h != it && it->t - h->t > window; ++h)
-      if (h->solid) return PixelClass::kOrderError;
+    for (auto h = first; h != it && it->t - h->t > window; ++h)
+      if (h->solid && is_listed(*h)) return PixelClass::kOrderError;
     return PixelClass::kEdge;
   }
-  const bool unique_nearest = it == hits.begin() && (hits.size() == 1 || hits[1].t - t_min > window);
+  bool unique_nearest = it == first;
+  if (unique_nearest)
+    for (auto h = first + 1; h != hits.end() && h->t - t_min <= window; ++h)
+      if (is_listed(*h)) unique_nearest = false;
   return unique_nearest ? PixelClass::kMatch : PixelClass::kTie;
 }
 
@@ -127,6 +146,7 @@ void PixelCounts::add(PixelClass c) {
       ++edge;
       ++uncovered;
       break;
+    case PixelClass::kMissed: ++missed; break;
   }
 }
 
@@ -135,6 +155,7 @@ PixelCounts& PixelCounts::operator+=(const PixelCounts& o) {
   tie += o.tie;
   edge += o.edge;
   uncovered += o.uncovered;
+  missed += o.missed;
   return *this;
 }
 
@@ -276,6 +297,8 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
   const std::vector<ValidationEye> eyes = sampleEyes(scene, options.eyes, options.seed, options.off_plane_fraction);
   std::vector<ViewReport> reports;
   std::vector<uint32_t> order_ids, painter_ids;
+  std::vector<uint8_t> listed;
+  uint64_t listed_total = 0;
   std::vector<std::vector<uint32_t>> z_ids(zbuffers.size());
   std::vector<RayHit> nearest;
   std::vector<uint32_t> mismatch;
@@ -289,6 +312,10 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
     t0 = Clock::now();
     order(eye, order_ids);
     result.order_seconds += since(t0);
+    listed.assign(polygons.size(), 0);
+    for (uint32_t id : order_ids)
+      if (id < listed.size()) listed[id] = 1;
+    listed_total += order_ids.size();
     t0 = Clock::now();
     const std::vector<uint8_t> front = caster.frontFacing(eye);
     result.raycast_seconds += since(t0);
@@ -336,7 +363,7 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
       for (auto& zc : z_classes) zc.assign(pixels, PixelClass::kMatch);
       for (size_t m = 0; m < mismatch.size(); ++m) {
         const uint32_t k = mismatch[m];
-        painter_classes[k] = classifyPixel(painter_ids[k], mismatch_hits[m]);
+        painter_classes[k] = classifyPixel(painter_ids[k], mismatch_hits[m], kTieRelativeTolerance, listed);
         report.painter.add(painter_classes[k]);
         for (size_t z = 0; z < zbuffers.size(); ++z) {
           z_classes[z][k] = classifyPixel(z_ids[z][k], mismatch_hits[m]);
@@ -349,7 +376,7 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
 
       if (!options.diff_dir.empty()) {
         const std::string stem = options.diff_dir + "/eye" + std::to_string(e) + "_face" + std::to_string(face);
-        if (report.painter.order_error > 0 && result.diff_images < static_cast<uint64_t>(options.max_diff_images)) {
+        if ((report.painter.order_error > 0 || report.painter.missed > 0) && result.diff_images < static_cast<uint64_t>(options.max_diff_images)) {
           writeDiffImage(stem + "_painter.png", size, scene, polygons, painter_ids, painter_classes);
           ++result.diff_images;
         }
@@ -368,6 +395,7 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
     if (options.progress) options.progress(static_cast<int>(e + 1), static_cast<int>(eyes.size()), result.painter.order_error);
   }
   result.pixels = result.views * pixels;
+  result.listed_mean = result.eyes ? static_cast<double>(listed_total) / static_cast<double>(result.eyes) : 0.0;
   auto zsum = [](const ViewReport& r) {
     uint64_t s = 0;
     for (uint64_t v : r.zbuffer_errors) s += v;

@@ -12,7 +12,15 @@
 //   edge         coverage: p is not on the exact ray (rasterisation at edges and silhouettes),
 //                nothing exact but p drawn, or the polygons nearer than p pass the pixel centre
 //                within kEdgeMarginPixels of their edges; `uncovered` (nothing drawn, something
-//                exact) is a part of edge and is also reported on its own.
+//                exact) is a part of edge and is also reported on its own;
+//   missed       (painter's image only; an order that may leave visible polygons out, e.g. the HFD
+//                tree's) every hit within the tie tolerance of the nearest exact hit belongs to a
+//                polygon that the order does not list, so no order of the listed polygons could show
+//                the right one there: the shown polygon (or nothing) is behind an unlisted nearest
+//                polygon. Checked first; the other classes are then decided among the listed
+//                polygons' hits only (unlisted hits are ignored), so an order error always means two
+//                LISTED polygons drawn in the wrong order. An order that lists every front-facing
+//                polygon (BSP, PFD) has no missed pixels unless it is wrong.
 #pragma once
 
 #include <cstdint>
@@ -34,19 +42,22 @@ namespace walkvis {
 // (coplanar overlaps, shared edges, split lines).
 constexpr double kTieRelativeTolerance = 1e-6;
 
-enum class PixelClass : uint8_t { kMatch, kOrderError, kTie, kEdge, kUncovered };
+enum class PixelClass : uint8_t { kMatch, kOrderError, kTie, kEdge, kUncovered, kMissed };
 
 // Classifies one pixel. `shown` is the image's polygon (kNoPolygon for nothing); `hits` are the
 // double-checked front-facing hits on the pixel's ray, sorted by t (RayCaster::exactHits with
-// also_check = shown, so shown is among them when the ray hits it).
+// also_check = shown, so shown is among them when the ray hits it). `listed`: per polygon index,
+// nonzero when the order lists it (indices beyond its size count as unlisted); empty = every
+// polygon is listed (then kMissed never happens, e.g. for z-buffer images).
 PixelClass classifyPixel(uint32_t shown, std::span<const RayHit> hits,
-                         double tie_tolerance = kTieRelativeTolerance);
+                         double tie_tolerance = kTieRelativeTolerance, std::span<const uint8_t> listed = {});
 
 struct PixelCounts {
   uint64_t order_error = 0;
   uint64_t tie = 0;
   uint64_t edge = 0;       // includes uncovered
   uint64_t uncovered = 0;  // nothing drawn where the exact image has a polygon
+  uint64_t missed = 0;     // the exact nearest polygon is not listed (not part of edge or order_error)
   void add(PixelClass c);
   PixelCounts& operator+=(const PixelCounts& o);
 };
@@ -101,6 +112,7 @@ struct ValidationResult {
   uint64_t views = 0;
   uint64_t pixels = 0;          // per image kind: views * size * size
   uint64_t exact_pixels = 0;    // pixels where the exact reference shows a polygon
+  double listed_mean = 0.0;     // polygons in the order per eye
   PixelCounts painter;
   std::vector<ZBufferResult> zbuffer;
   std::vector<ViewReport> worst_views;  // most painter's order errors, then most z-buffer errors

@@ -63,6 +63,7 @@ struct BspBenchArgs {
   uint32_t samples = BspOptions{}.samples;
   double split_weight = BspOptions{}.split_weight;
   double coplanar_weight = BspOptions{}.coplanar_weight;
+  uint32_t lookahead_max = BspOptions{}.lookahead_max;
   bool json = false;
 };
 
@@ -79,6 +80,7 @@ int runBspBench(const BspBenchArgs& args) {
   out["samples"] = args.samples;
   out["split_weight"] = args.split_weight;
   out["coplanar_weight"] = args.coplanar_weight;
+  out["lookahead_max"] = args.lookahead_max;
   auto rows = nlohmann::ordered_json::array();
   if (!args.json)
     std::printf("%-28s %8s %-13s %9s %6s %5s %6s %10s %9s %8s %8s\n", "scene", "n", "heuristic", "N", "N/n", "depth",
@@ -102,7 +104,7 @@ int runBspBench(const BspBenchArgs& args) {
     double ratio_of[2] = {0.0, 0.0};
     for (int h = 0; h < 2; ++h) {
       BspOptions options{heuristics[h], args.candidates, args.seed, args.samples, args.split_weight,
-                         args.coplanar_weight};
+                         args.coplanar_weight, args.lookahead_max};
       std::vector<double> times, cpu_times;
       std::vector<double> order_times;
       BspStats stats;
@@ -222,6 +224,9 @@ void addBspBench(CLI::App& bench, CommandRunner& runner) {
       ->check(CLI::Range(1, 1000000));
   sub->add_option("--split-weight", args->split_weight, "Least-crossed score per crossed polygon");
   sub->add_option("--coplanar-weight", args->coplanar_weight, "Least-crossed score bonus per coplanar polygon");
+  sub->add_option("--lookahead-max", args->lookahead_max,
+                  "Least-crossed: node sets up to this size are scored exactly with one level of lookahead (0 = off)")
+      ->check(CLI::Range(0, 100000));
   sub->add_flag("--json", args->json, "Print JSON");
   sub->callback([args, &runner] { runner = [args] { return runBspBench(*args); }; });
 }
@@ -233,6 +238,8 @@ void addBenchCommand(CLI::App& app, CommandRunner& runner) {
   bench->require_subcommand(1);
   addBspBench(*bench, runner);
   addBenchBackface(*bench, runner);
+  addBenchHfd(*bench, runner);
+  addBenchFrames(*bench, runner);
 }
 
 }  // namespace walkvis

@@ -1,4 +1,4 @@
-// walkvis bench backface [--mesh SCENE ...] [--eyes K] [--runs K] [--json]: every backface method
+// walkvis bench backface [--mesh SCENE ...] [--lists WAD:MAP] [--eyes K] [--runs K] [--json]: every backface method
 // of backface/ and meshoptimizer's meshlet cone culling on the same meshes and the same eyes.
 //
 // Eyes: uniformly random directions at 1.5–4 bounding radii from the centre of the mesh's box,
@@ -7,11 +7,27 @@
 // back-facing), ns_per_polygon (time of the per-frame cull step over all eyes divided by eyes ×
 // polygons; median over --runs; the unit → polygon expansion is not timed), bytes_per_polygon
 // (per-frame test state / polygons) and false_culls (front faces culled, summed over the eyes:
-// must be 0 for our methods). Exit status 1 when any of our methods culls a front face.
+// must be 0 for our methods), of which false_culls_zero_area are of polygons meshoptimizer sees
+// no area in (coneInvisiblePolygons: the cone peer culls those by design; they have no pixels).
+// Exit status 1 when any of our methods culls a front face.
 // hierarchy (Kumar et al.) tracks the eye from frame to frame, so it is timed twice: on the eyes in
 // their random order (every frame a jump: full tests) and as hierarchy-tour, the same eyes in the
 // order of a greedy nearest-neighbour tour (same culled figures, coherent motion).
 //
+// Meshes: --mesh (any scene: OBJ, glTF, gen:...), plus the Stanford bunny when scripts/fetch-bunny
+// has fetched it (--bunny PATH, --no-bunny; a note says when it is skipped).
+// --lists WAD:MAP (default freedoom2.wad:MAP01; "" for none): the level of the start eye built as
+// PFD trees with drop_back_faces = false; every run of every tree is a range of a ListCuller
+// (backface/list_cull.h) per method none/polygon/mask/mask-groups/cluster/hierarchy/region, and
+// meshoptimizer cones built per run; random eyes on the height plane; per eye the runs of its query
+// are culled in order (timed: cullRange with the order written out; cone: cull, expansion and
+// order). Figures are per listed polygon. mask is Zhang & Hoff's table on chunks of at least
+// mask_list_min_chunk positions and the plane test on smaller ones (nearly every PFD run);
+// mask-tables builds a table for every run. Then the BSP path: every fragment of the level's BSP
+// with eyes anywhere in the scene's box, the same table as for meshes, its cluster rows clustered
+// for eyes in that box and cluster-paper with the paper's near field around each cluster.
+// Any scene with floor levels works for --lists (e.g. gen:office: eyes inside a building). Each table ends with the issue's
+// target line: cluster effectiveness >= cone's at no more ns per polygon (JSON: cluster_vs_cone).
 // --subdivision adds Möller & Séquin's culled Loop subdivision of the animated blob
 // (backface/subdivision.h) at 1..3 levels: triangles computed over the levels (full / culled),
 // the final level's, and the time per frame, over --eyes random eyes at 2–10 radii and times. With
@@ -20,16 +36,22 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <random>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 
 #include "backface/backface.h"
+#include "backface/list_cull.h"
 #include "backface/subdivision.h"
+#include "bsp/bsp.h"
+#include "pfd_hfd/pfd.h"
 #include "commands.h"
 
 namespace walkvis {
@@ -46,6 +68,9 @@ struct BackfaceBenchArgs {
   bool json = false;
   bool subdivision = false;
   int subdivision_refine = 2;
+  std::string bunny;     // empty: the cache path of scripts/fetch-bunny
+  bool no_bunny = false;
+  std::string lists = "freedoom2.wad:MAP01";  // empty: no priority lists
 };
 
 struct Variant {
@@ -55,11 +80,19 @@ struct Variant {
   bool tour = false;  // eyes in nearest-neighbour tour order
 };
 
-std::vector<Variant> variants(const BackfaceBenchArgs& args) {
+// eye_box: where the eyes are, when they are inside the scene (the BSP path): cluster then
+// clusters by the culling probability over that box, and cluster-paper shows the paper's box
+// around each cluster's origin (backface.h, cluster_eye_lo).
+std::vector<Variant> variants(const BackfaceBenchArgs& args, const Bounds* eye_box) {
   BackfaceOptions base;
   base.mask_resolution = args.mask_resolution;
   base.cluster_tr = args.tr;
   std::vector<Variant> out;
+  if (eye_box) {
+    out.push_back({"cluster-paper", BackfaceMethod::kCluster, base});
+    base.cluster_eye_lo = eye_box->lo;
+    base.cluster_eye_hi = eye_box->hi;
+  }
   out.push_back({"polygon", BackfaceMethod::kPolygon, base});
   out.push_back({"mask", BackfaceMethod::kMask, base});
   BackfaceOptions grouped = base;
@@ -159,93 +192,424 @@ nlohmann::ordered_json runSubdivisionBench(const BackfaceBenchArgs& args) {
   return out;
 }
 
+// meshoptimizer's false culls of zero-area polygons are its documented handling of degenerate
+// triangles (meshlet_cone.cpp), not a rounding error of the cone test: say so under the table.
+void printZeroAreaNote(uint64_t count) {
+  std::printf("  note: %llu of cone's false culls are of polygons with no area at float precision (meshoptimizer\n"
+              "        rejects meshlets of zero-area triangles; a sliver's float normal is rounding noise); no pixels\n",
+              static_cast<unsigned long long>(count));
+}
+
+// Every variant on one polygon set and one list of eyes; appends the JSON rows to `methods`.
+nlohmann::ordered_json benchInput(const std::string& label, const BackfaceInput& input, uint64_t triangles,
+                                  const std::vector<BackfaceView>& views, const BackfaceBenchArgs& args, bool& ok,
+                                  const Bounds* eye_box = nullptr) {
+  const size_t n = input.polygons.size();
+  if (n == 0) throw SceneError(label + ": no polygons to cull");
+  const std::vector<BackfaceView> tour_views = tourOrder(views);
+  uint64_t back_total = 0;
+  for (const BackfaceView& v : views) {
+    for (const Polygon& p : input.polygons) back_total += !isFrontFacing(p.plane, v.eye);
+  }
+  nlohmann::ordered_json mesh;
+  mesh["mesh"] = label;
+  mesh["polygons"] = n;
+  mesh["triangles"] = triangles;
+  mesh["back_facing_ratio"] = static_cast<double>(back_total) / (static_cast<double>(n) * views.size());
+  nlohmann::ordered_json methods = nlohmann::ordered_json::array();
+  if (!args.json) {
+    std::printf("%s: %zu polygons, %.1f%% back-facing over %zu eyes\n", label.c_str(), n,
+                100.0 * mesh["back_facing_ratio"].get<double>(), views.size());
+    std::printf("  %-13s %8s %8s %9s %8s %8s %7s %9s\n", "method", "culled%", "effect%", "ns/poly", "B/poly", "units",
+                "false", "build_s");
+  }
+  uint64_t zero_area_note = 0;
+  // Polygons meshoptimizer sees no area in (coneInvisiblePolygons): a cone cull of one is the
+  // library's trivial reject of an invisible meshlet, counted apart.
+  std::vector<uint8_t> invisible(n);
+  coneInvisiblePolygons(input, invisible);
+  for (const Variant& variant : variants(args, eye_box)) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto culler = makeBackfaceCuller(variant.method, input, variant.options);
+    const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::vector<uint8_t> units(culler->unitCount()), culled(n);
+    uint64_t culled_total = 0, false_culls = 0, false_invisible = 0;
+    const std::vector<BackfaceView>& eyes = variant.tour ? tour_views : views;
+    for (const BackfaceView& v : eyes) {
+      culler->cull(v, units);
+      expandToPolygons(*culler, units, culled);
+      for (size_t p = 0; p < n; ++p) {
+        culled_total += culled[p];
+        const bool wrong = culled[p] && isFrontFacing(input.polygons[p].plane, v.eye);
+        false_culls += wrong;
+        false_invisible += wrong && invisible[p];
+      }
+    }
+    std::vector<double> ns;
+    uint64_t sink = 0;
+    for (int r = 0; r < args.runs; ++r) {
+      const auto t1 = std::chrono::steady_clock::now();
+      for (const BackfaceView& v : eyes) {
+        culler->cull(v, units);
+        sink += units.empty() ? 0 : units[0];
+      }
+      const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+      ns.push_back(1e9 * sec / (static_cast<double>(views.size()) * static_cast<double>(n)));
+    }
+    if (sink == uint64_t(-1)) std::printf(" ");  // keeps the timed loop's results alive
+    const double culled_ratio = static_cast<double>(culled_total) / (static_cast<double>(n) * views.size());
+    const double effectiveness = back_total ? static_cast<double>(culled_total) / static_cast<double>(back_total) : 0.0;
+    const double ns_per_polygon = medianOf(ns);
+    const double bytes_per_polygon = static_cast<double>(culler->stateBytes()) / static_cast<double>(n);
+    if (variant.method != BackfaceMethod::kCone && false_culls > 0) ok = false;
+    methods.push_back({{"method", variant.label},
+                       {"culled_ratio", culled_ratio},
+                       {"effectiveness", effectiveness},
+                       {"ns_per_polygon", ns_per_polygon},
+                       {"bytes_per_polygon", bytes_per_polygon},
+                       {"false_culls", false_culls},
+                       {"false_culls_zero_area", false_invisible},
+                       {"units", culler->unitCount()},
+                       {"build_seconds", build_seconds}});
+    if (!args.json) {
+      std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %8zu %7llu %9.3f\n", variant.label.c_str(), 100.0 * culled_ratio,
+                  100.0 * effectiveness, ns_per_polygon, bytes_per_polygon, culler->unitCount(),
+                  static_cast<unsigned long long>(false_culls), build_seconds);
+    }
+    if (variant.method == BackfaceMethod::kCone) zero_area_note = std::max(zero_area_note, false_invisible);
+  }
+  if (!args.json && zero_area_note > 0) printZeroAreaNote(zero_area_note);
+  mesh["methods"] = methods;
+  return mesh;
+}
+
+// The target: the clustered test's effectiveness at least the cone's, at no more cost per
+// polygon. Adds "cluster_vs_cone" to the mesh and prints a line.
+void checkClusterVsCone(nlohmann::ordered_json& mesh, bool json) {
+  const nlohmann::ordered_json* cluster = nullptr;
+  const nlohmann::ordered_json* cone = nullptr;
+  for (const auto& m : mesh["methods"]) {
+    if (m["method"] == "cluster") cluster = &m;
+    if (m["method"] == "cone") cone = &m;
+  }
+  if (!cluster || !cone) return;
+  const double ce = (*cluster)["effectiveness"], ke = (*cone)["effectiveness"];
+  const double cn = (*cluster)["ns_per_polygon"], kn = (*cone)["ns_per_polygon"];
+  const bool eff_ok = ce >= ke, cost_ok = cn <= kn;
+  mesh["cluster_vs_cone"] = {{"effectiveness_met", eff_ok}, {"cost_met", cost_ok}};
+  if (!json) {
+    std::printf("  target cluster >= cone effectiveness (%.1f%% vs %.1f%%): %s; cost <= cone's (%.3f vs %.3f ns/poly): %s\n",
+                100.0 * ce, 100.0 * ke, eff_ok ? "met" : "NOT met", cn, kn, cost_ok ? "met" : "NOT met");
+  }
+}
+
+// Eyes around a mesh: uniformly random directions at 1.5–4 bounding radii from the box centre,
+// looking at the centre with a 60° cone.
+std::vector<BackfaceView> eyesAround(const Bounds& b, int count, uint64_t seed) {
+  const glm::dvec3 center = 0.5 * (b.lo + b.hi);
+  const double radius = std::max(0.5 * glm::length(b.hi - b.lo), 1e-9);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g;
+  std::uniform_real_distribution<double> u(1.5, 4.0);
+  std::vector<BackfaceView> views(static_cast<size_t>(count));
+  for (BackfaceView& v : views) {
+    glm::dvec3 dir(g(rng), g(rng), g(rng));
+    dir = glm::normalize(dir);
+    v.eye = center + u(rng) * radius * dir;
+    v.view_dir = -dir;
+    v.fov = M_PI / 3.0;
+  }
+  return views;
+}
+
+std::string defaultBunnyPath() {
+  if (const char* data = std::getenv("WALKVIS_DATA")) return std::string(data) + "/bunny.obj";
+  if (const char* cache = std::getenv("XDG_CACHE_HOME")) return std::string(cache) + "/walkvis/bunny.obj";
+  if (const char* home = std::getenv("HOME")) return std::string(home) + "/.cache/walkvis/bunny.obj";
+  return "";
+}
+
+struct ListRow {
+  std::string label;
+  ListCullMethod method = ListCullMethod::kNone;
+  bool cone = false;  // meshoptimizer cones per run instead (not a ListCuller method)
+  BackfaceOptions options;
+};
+
+// Priority lists of a WAD level: the start eye's level built as PFD trees with drop_back_faces =
+// false; every run of every tree is a range; the eyes are random points of the level's region on
+// its height plane; per eye the runs pfdQueryRuns yields are culled in order. Then the BSP path:
+// all fragments, eyes anywhere in the level's box (off the height plane).
+std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const BackfaceBenchArgs& args, bool& ok) {
+  std::vector<nlohmann::ordered_json> out;
+  const Scene scene = loadScene(spec);
+  if (scene.levels.empty()) throw SceneError(spec + ": no floor levels to build priority lists on");
+  size_t level = 0;
+  for (size_t l = 0; l < scene.levels.size(); ++l) {
+    const double dy = std::abs(scene.levels[l].floor_y + scene.eye_height - scene.start_eye.y);
+    if (dy < std::abs(scene.levels[level].floor_y + scene.eye_height - scene.start_eye.y)) level = l;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const BspTree bsp = buildBsp(scene);
+  PfdLevelOptions options;
+  options.tree.drop_back_faces = false;
+  options.tree.stat_eyes = 0;
+  uint64_t used = 0;
+  const PfdLevel trees = buildPfdLevel(bsp, scene.levels[level], static_cast<uint32_t>(level), scene.eye_height, options, used);
+  const double tree_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const BackfaceInput input{bsp.vertices, bsp.fragments};
+
+  // Ranges per tree (its runs) and, per eye, the ranges its query yields.
+  std::vector<std::vector<IndexRange>> ranges(trees.cells.size());
+  std::vector<std::unordered_map<uint64_t, uint32_t>> run_index(trees.cells.size());
+  double area = 0.0;
+  uint64_t pool = 0;
+  for (size_t t = 0; t < trees.cells.size(); ++t) {
+    for (const PfdRun& run : trees.cells[t].runs) {
+      run_index[t].emplace((uint64_t{run.first} << 32) | run.count, static_cast<uint32_t>(ranges[t].size()));
+      ranges[t].push_back({run.first, run.count});
+    }
+    area += trees.cells[t].stats.region_area;
+    pool += trees.cells[t].fragment_ids.size();
+  }
+  struct Eye {
+    BackfaceView view;
+    uint32_t tree = 0;
+    std::vector<uint32_t> ranges;
+  };
+  std::vector<Eye> eyes;
+  uint64_t rng_state = args.seed;
+  std::mt19937_64 rng(args.seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<PfdRun> runs;
+  uint64_t listed = 0, back_total = 0;
+  for (int e = 0; e < args.eyes && area > 0.0; ++e) {
+    double pick = u(rng) * area;
+    size_t t = 0;
+    while (t + 1 < trees.cells.size() && pick > trees.cells[t].stats.region_area) pick -= trees.cells[t++].stats.region_area;
+    const PfdTree& tree = trees.cells[t];
+    const glm::dvec2 p = samplePfdRegion(tree, rng_state);
+    Eye eye;
+    eye.tree = static_cast<uint32_t>(t);
+    eye.view.eye = glm::dvec3(p.x, tree.height, p.y);
+    const double yaw = 2.0 * M_PI * u(rng);
+    eye.view.view_dir = glm::dvec3(std::cos(yaw), 0.0, std::sin(yaw));
+    eye.view.fov = M_PI / 3.0;
+    pfdQueryRuns(tree, eye.view.eye, runs);
+    for (const PfdRun& run : runs) {
+      const auto it = run_index[t].find((uint64_t{run.first} << 32) | run.count);
+      if (it == run_index[t].end()) throw SceneError(spec + ": a query yielded a run the tree does not hold");
+      eye.ranges.push_back(it->second);
+      listed += run.count;
+      for (uint32_t k = 0; k < run.count; ++k) {
+        back_total += !isFrontFacing(bsp.fragments[tree.fragment_ids[run.first + k]].plane, eye.view.eye);
+      }
+    }
+    eyes.push_back(std::move(eye));
+  }
+  if (listed == 0) throw SceneError(spec + ": the priority lists of level " + std::to_string(level) + " are empty");
+
+  nlohmann::ordered_json lists;
+  lists["mesh"] = spec + " pfd lists (level " + std::to_string(level) + ")";
+  lists["polygons"] = pool;
+  lists["trees"] = trees.cells.size();
+  lists["runs"] = [&] {
+    size_t r = 0;
+    for (const auto& v : ranges) r += v.size();
+    return r;
+  }();
+  lists["listed_per_eye"] = static_cast<double>(listed) / static_cast<double>(eyes.size());
+  lists["back_facing_ratio"] = static_cast<double>(back_total) / static_cast<double>(listed);
+  lists["tree_build_seconds"] = tree_seconds;
+  if (!args.json) {
+    std::printf("%s: %zu trees, %llu runs, %.1f listed per eye, %.1f%% of them back-facing, %zu eyes (BSP+trees %.1f s)\n",
+                lists["mesh"].get<std::string>().c_str(), trees.cells.size(),
+                static_cast<unsigned long long>(lists["runs"].get<uint64_t>()), lists["listed_per_eye"].get<double>(),
+                100.0 * lists["back_facing_ratio"].get<double>(), eyes.size(), tree_seconds);
+    std::printf("  %-13s %8s %8s %9s %8s %8s %7s %9s\n", "method", "culled%", "effect%", "ns/poly", "B/poly", "", "false",
+                "build_s");
+  }
+  BackfaceOptions base;
+  base.mask_resolution = args.mask_resolution;
+  base.cluster_tr = args.tr;
+  BackfaceOptions chunked = base;
+  chunked.mask_group_size = args.mask_group;
+  std::vector<ListRow> rows;
+  for (ListCullMethod m : {ListCullMethod::kNone, ListCullMethod::kPolygon, ListCullMethod::kMask, ListCullMethod::kCluster,
+                           ListCullMethod::kHierarchy, ListCullMethod::kRegion}) {
+    rows.push_back({std::string(listCullMethodName(m)), m, false, base});
+  }
+  rows.insert(rows.begin() + 3, ListRow{"mask-groups", ListCullMethod::kMask, false, chunked});
+  // mask-tables: Zhang & Hoff's table for every chunk however small (mask uses the plane test on
+  // chunks under mask_list_min_chunk positions, where a table cannot pay; list_cull.cpp).
+  BackfaceOptions tables = base;
+  tables.mask_list_min_chunk = 1;
+  rows.insert(rows.begin() + 4, ListRow{"mask-tables", ListCullMethod::kMask, false, tables});
+  rows.push_back({"cone", ListCullMethod::kNone, true, base});
+
+  nlohmann::ordered_json methods = nlohmann::ordered_json::array();
+  std::vector<uint32_t> order;
+  order.reserve(pool);
+  for (const ListRow& row : rows) {
+    const auto t1 = std::chrono::steady_clock::now();
+    std::vector<ListCuller> cullers;
+    // cone: one meshoptimizer culler per run, over the run's own vertices.
+    std::vector<std::vector<std::unique_ptr<BackfaceCuller>>> cones(trees.cells.size());
+    std::vector<std::vector<std::vector<uint8_t>>> cone_invisible(trees.cells.size());  // per run, per position
+    size_t max_units = 1, max_count = 1;
+    uint64_t bytes = 0;
+    for (size_t t = 0; t < trees.cells.size(); ++t) {
+      const PfdTree& tree = trees.cells[t];
+      if (!row.cone) {
+        cullers.push_back(ListCuller::build(input, tree.fragment_ids, ranges[t], row.method, row.options));
+        bytes += cullers.back().bytes();
+        continue;
+      }
+      std::vector<Polygon> local;
+      std::vector<glm::dvec3> local_vertices;
+      for (const IndexRange& r : ranges[t]) {
+        local.clear();
+        local_vertices.clear();
+        for (uint32_t k = 0; k < r.count; ++k) {
+          Polygon poly = bsp.fragments[tree.fragment_ids[r.first + k]];
+          const auto v = bsp.fragmentVertices(tree.fragment_ids[r.first + k]);
+          poly.first_vertex = static_cast<uint32_t>(local_vertices.size());
+          local_vertices.insert(local_vertices.end(), v.begin(), v.end());
+          local.push_back(poly);
+        }
+        cones[t].push_back(makeBackfaceCuller(BackfaceMethod::kCone, BackfaceInput{local_vertices, local}, row.options));
+        cone_invisible[t].emplace_back(local.size());
+        coneInvisiblePolygons(BackfaceInput{local_vertices, local}, cone_invisible[t].back());
+        bytes += cones[t].back()->stateBytes();
+        max_units = std::max(max_units, cones[t].back()->unitCount());
+        max_count = std::max<size_t>(max_count, r.count);
+      }
+    }
+    const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    std::vector<uint8_t> unit_flags(max_units), poly_flags(max_count);
+    // Culls one eye's lists into `order`; returns the number culled.
+    auto cullEye = [&](const Eye& eye) {
+      order.clear();
+      uint64_t culled = 0;
+      const PfdTree& tree = trees.cells[eye.tree];
+      for (uint32_t r : eye.ranges) {
+        if (!row.cone) {
+          culled += cullers[eye.tree].cullRange(r, eye.view, order);
+          continue;
+        }
+        const BackfaceCuller& c = *cones[eye.tree][r];
+        const IndexRange& range = ranges[eye.tree][r];
+        c.cull(eye.view, std::span<uint8_t>(unit_flags.data(), c.unitCount()));
+        expandToPolygons(c, std::span<const uint8_t>(unit_flags.data(), c.unitCount()),
+                         std::span<uint8_t>(poly_flags.data(), range.count));
+        for (uint32_t k = 0; k < range.count; ++k) {
+          if (!poly_flags[k]) order.push_back(tree.fragment_ids[range.first + k]);
+          culled += poly_flags[k];
+        }
+      }
+      return culled;
+    };
+    uint64_t culled_total = 0, false_culls = 0, front_kept = 0, false_invisible = 0;
+    for (const Eye& eye : eyes) {
+      culled_total += cullEye(eye);
+      if (row.cone) {  // which culled front faces the library sees no area in
+        const PfdTree& tree = trees.cells[eye.tree];
+        for (uint32_t r : eye.ranges) {
+          const BackfaceCuller& c = *cones[eye.tree][r];
+          const IndexRange& range = ranges[eye.tree][r];
+          c.cull(eye.view, std::span<uint8_t>(unit_flags.data(), c.unitCount()));
+          expandToPolygons(c, std::span<const uint8_t>(unit_flags.data(), c.unitCount()),
+                           std::span<uint8_t>(poly_flags.data(), range.count));
+          for (uint32_t k = 0; k < range.count; ++k) {
+            false_invisible += poly_flags[k] && cone_invisible[eye.tree][r][k] &&
+                               isFrontFacing(bsp.fragments[tree.fragment_ids[range.first + k]].plane, eye.view.eye);
+          }
+        }
+      }
+      // Front faces listed minus front faces kept = front faces culled.
+      uint64_t front_listed = 0;
+      const PfdTree& tree = trees.cells[eye.tree];
+      for (uint32_t r : eye.ranges) {
+        const IndexRange& range = ranges[eye.tree][r];
+        for (uint32_t k = 0; k < range.count; ++k) {
+          front_listed += isFrontFacing(bsp.fragments[tree.fragment_ids[range.first + k]].plane, eye.view.eye);
+        }
+      }
+      front_kept = 0;
+      for (uint32_t f : order) front_kept += isFrontFacing(bsp.fragments[f].plane, eye.view.eye);
+      false_culls += front_listed - front_kept;
+    }
+    std::vector<double> ns;
+    for (int run = 0; run < args.runs; ++run) {
+      const auto t2 = std::chrono::steady_clock::now();
+      uint64_t sink = 0;
+      for (const Eye& eye : eyes) sink += cullEye(eye);
+      const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count();
+      ns.push_back(1e9 * sec / static_cast<double>(listed));
+      if (sink == uint64_t(-1)) std::printf(" ");
+    }
+    if (!row.cone && false_culls > 0) ok = false;
+    const double culled_ratio = static_cast<double>(culled_total) / static_cast<double>(listed);
+    const double effectiveness = back_total ? static_cast<double>(culled_total) / static_cast<double>(back_total) : 0.0;
+    const double bytes_per_polygon = static_cast<double>(bytes) / static_cast<double>(std::max<uint64_t>(pool, 1));
+    methods.push_back({{"method", row.label},
+                       {"culled_ratio", culled_ratio},
+                       {"effectiveness", effectiveness},
+                       {"ns_per_polygon", medianOf(ns)},
+                       {"bytes_per_polygon", bytes_per_polygon},
+                       {"false_culls", false_culls},
+                       {"false_culls_zero_area", false_invisible},
+                       {"build_seconds", build_seconds}});
+    if (!args.json) {
+      std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %8s %7llu %9.3f\n", row.label.c_str(), 100.0 * culled_ratio,
+                  100.0 * effectiveness, medianOf(ns), bytes_per_polygon, "", static_cast<unsigned long long>(false_culls),
+                  build_seconds);
+      if (row.cone && false_invisible > 0) printZeroAreaNote(false_invisible);
+    }
+  }
+  lists["methods"] = methods;
+  checkClusterVsCone(lists, args.json);
+  out.push_back(lists);
+
+  // The BSP path: every fragment, eyes anywhere in the level's box at any height.
+  const Bounds b = sceneBounds(scene);
+  std::vector<BackfaceView> views(static_cast<size_t>(args.eyes));
+  for (BackfaceView& v : views) {
+    v.eye = glm::dvec3(b.lo.x + u(rng) * (b.hi.x - b.lo.x), b.lo.y + u(rng) * (b.hi.y - b.lo.y), b.lo.z + u(rng) * (b.hi.z - b.lo.z));
+    const double yaw = 2.0 * M_PI * u(rng);
+    v.view_dir = glm::dvec3(std::cos(yaw), 0.0, std::sin(yaw));
+    v.fov = M_PI / 3.0;
+  }
+  uint64_t tris = 0;
+  for (const Polygon& p : bsp.fragments) tris += p.vertex_count - 2;
+  nlohmann::ordered_json whole = benchInput(spec + " bsp fragments (eyes in the box)", input, tris, views, args, ok, &b);
+  checkClusterVsCone(whole, args.json);
+  out.push_back(whole);
+  return out;
+}
+
 int runBackfaceBench(const BackfaceBenchArgs& args) {
   nlohmann::ordered_json out = nlohmann::ordered_json::array();
   bool ok = true;
-  for (const std::string& spec : args.meshes) {
+  std::vector<std::string> meshes = args.meshes;
+  if (!args.no_bunny) {
+    const std::string bunny = args.bunny.empty() ? defaultBunnyPath() : args.bunny;
+    if (!bunny.empty() && std::filesystem::exists(bunny)) {
+      meshes.push_back(bunny);
+    } else if (!args.json) {
+      std::printf("bunny: not fetched (%s missing; run scripts/fetch-bunny) - skipped\n",
+                  bunny.empty() ? "no path" : bunny.c_str());
+    }
+  }
+  for (const std::string& spec : meshes) {
     const Scene scene = loadScene(spec);
-    const size_t n = scene.polygons.size();
-    if (n == 0) throw SceneError(spec + ": no polygons to cull");
-    const Bounds b = sceneBounds(scene);
-    const glm::dvec3 center = 0.5 * (b.lo + b.hi);
-    const double radius = std::max(0.5 * glm::length(b.hi - b.lo), 1e-9);
-    std::mt19937_64 rng(args.seed);
-    std::normal_distribution<double> g;
-    std::uniform_real_distribution<double> u(1.5, 4.0);
-    std::vector<BackfaceView> views(static_cast<size_t>(args.eyes));
-    for (BackfaceView& v : views) {
-      glm::dvec3 dir(g(rng), g(rng), g(rng));
-      dir = glm::normalize(dir);
-      v.eye = center + u(rng) * radius * dir;
-      v.view_dir = -dir;
-      v.fov = M_PI / 3.0;
-    }
-    const std::vector<BackfaceView> tour_views = tourOrder(views);
-    // Back-facing counts per eye, from the ground truth.
-    uint64_t back_total = 0;
-    for (const BackfaceView& v : views) {
-      for (const Polygon& p : scene.polygons) back_total += !isFrontFacing(p.plane, v.eye);
-    }
-    nlohmann::ordered_json mesh;
-    mesh["mesh"] = spec;
-    mesh["polygons"] = n;
-    mesh["triangles"] = triangleCount(scene);
-    mesh["back_facing_ratio"] = static_cast<double>(back_total) / (static_cast<double>(n) * views.size());
-    nlohmann::ordered_json methods = nlohmann::ordered_json::array();
-    if (!args.json) {
-      std::printf("%s: %zu polygons, %.1f%% back-facing over %d eyes\n", spec.c_str(), n,
-                  100.0 * mesh["back_facing_ratio"].get<double>(), args.eyes);
-      std::printf("  %-13s %8s %8s %9s %8s %8s %7s %9s\n", "method", "culled%", "effect%", "ns/poly", "B/poly",
-                  "units", "false", "build_s");
-    }
-    for (const Variant& variant : variants(args)) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const auto culler = makeBackfaceCuller(variant.method, backfaceInput(scene), variant.options);
-      const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::vector<uint8_t> units(culler->unitCount()), culled(n);
-      uint64_t culled_total = 0, false_culls = 0;
-      const std::vector<BackfaceView>& eyes = variant.tour ? tour_views : views;
-      for (const BackfaceView& v : eyes) {
-        culler->cull(v, units);
-        expandToPolygons(*culler, units, culled);
-        for (size_t p = 0; p < n; ++p) {
-          culled_total += culled[p];
-          false_culls += culled[p] && isFrontFacing(scene.polygons[p].plane, v.eye);
-        }
-      }
-      std::vector<double> ns;
-      uint64_t sink = 0;
-      for (int r = 0; r < args.runs; ++r) {
-        const auto t1 = std::chrono::steady_clock::now();
-        for (const BackfaceView& v : eyes) {
-          culler->cull(v, units);
-          sink += units.empty() ? 0 : units[0];
-        }
-        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-        ns.push_back(1e9 * s / (static_cast<double>(views.size()) * static_cast<double>(n)));
-      }
-      if (sink == uint64_t(-1)) std::printf(" ");  // keeps the timed loop's results alive
-      const double culled_ratio = static_cast<double>(culled_total) / (static_cast<double>(n) * views.size());
-      const double effectiveness = back_total ? static_cast<double>(culled_total) / static_cast<double>(back_total) : 0.0;
-      const double ns_per_polygon = medianOf(ns);
-      const double bytes_per_polygon = static_cast<double>(culler->stateBytes()) / static_cast<double>(n);
-      if (variant.method != BackfaceMethod::kCone && false_culls > 0) ok = false;
-      methods.push_back({{"method", variant.label},
-                         {"culled_ratio", culled_ratio},
-                         {"effectiveness", effectiveness},
-                         {"ns_per_polygon", ns_per_polygon},
-                         {"bytes_per_polygon", bytes_per_polygon},
-                         {"false_culls", false_culls},
-                         {"units", culler->unitCount()},
-                         {"build_seconds", build_seconds}});
-      if (!args.json) {
-        std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %8zu %7llu %9.3f\n", variant.label.c_str(), 100.0 * culled_ratio,
-                    100.0 * effectiveness, ns_per_polygon, bytes_per_polygon, culler->unitCount(),
-                    static_cast<unsigned long long>(false_culls), build_seconds);
-      }
-    }
-    mesh["methods"] = methods;
+    nlohmann::ordered_json mesh = benchInput(spec, backfaceInput(scene), triangleCount(scene),
+                                             eyesAround(sceneBounds(scene), args.eyes, args.seed), args, ok);
+    checkClusterVsCone(mesh, args.json);
     out.push_back(mesh);
+  }
+  if (!args.lists.empty()) {
+    for (auto& m : benchLists(args.lists, args, ok)) out.push_back(std::move(m));
   }
   if (args.subdivision) {
     nlohmann::ordered_json sub = runSubdivisionBench(args);
@@ -274,6 +638,11 @@ void addBenchBackface(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--tr", args->tr, "Johannsen-Carter T/R (cluster test time over vertex time)")->check(CLI::NonNegativeNumber);
   sub->add_option("--mask-n", args->mask_resolution, "Normal-mask cells per cube-face side")->check(CLI::Range(1, 18));
   sub->add_option("--mask-group", args->mask_group, "Polygons per view-cone group of mask-groups")->check(CLI::Range(1u, 1u << 30));
+  sub->add_option("--bunny", args->bunny, "The bunny OBJ (default: where scripts/fetch-bunny puts it; skipped when missing)");
+  sub->add_flag("--no-bunny", args->no_bunny, "Leave the bunny out");
+  sub->add_option("--lists", args->lists,
+                  "WAD level whose start level is built as PFD trees (drop_back_faces = false) and culled per run, "
+                  "then its BSP fragments; empty string: none (default freedoom2.wad:MAP01)");
   sub->add_flag("--json", args->json, "Print JSON");
   sub->add_flag("--subdivision", args->subdivision,
                 "Also Moller-Sequin culled Loop subdivision of the animated blob at 1..3 levels");

@@ -1,9 +1,13 @@
-// walkvis build SCENE -o FILE: the BSP and one PFD tree per floor level (cut into view cells where
-// a tree would be too large), their statistics, and one tree file holding them all.
+// walkvis build SCENE -o FILE [--tree pfd|hfd]: the BSP and one PFD or HFD tree per floor level
+// (cut into view cells where a tree would be too large), their statistics, and one tree file
+// holding them all. HFD trees (James & Day 1998, DESIGN.md "HFD tree") test each fragment for
+// visibility from the node's region with a VisibilityScene of the whole BSP (pfd_hfd/visibility.h).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -21,6 +25,9 @@ struct BuildArgs {
   std::string max_memory = "1G";
   std::string cell_memory = "64M";
   std::string heuristic = "balanced";
+  std::string samples;  // hfd: R,P,REFINE
+  uint64_t visibility_seed = 1;
+  bool keep_back_faces = false;
   bool no_dedup = false;
   uint32_t stat_eyes = 10000;
   bool json = false;
@@ -44,6 +51,32 @@ uint64_t parseSize(const std::string& text, const std::string& option) {
   if (!(value >= 0.0) || !std::isfinite(value) || value * mult > 1e18)
     throw SceneError(option + ": '" + text + "' is out of range");
   return static_cast<uint64_t>(value * mult);
+}
+
+// "R,P,REFINE": region samples, polygon samples, refinement rays (VisibilityOptions).
+VisibilityOptions parseSamples(const std::string& text, VisibilityOptions options) {
+  if (text.empty()) return options;
+  std::vector<uint32_t> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    size_t used = 0;
+    unsigned long x = 0;
+    try {
+      x = std::stoul(item, &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || x > 1000000)
+      throw SceneError("--samples: '" + text + "' is not R,P,REFINE (three counts up to 1000000)");
+    v.push_back(static_cast<uint32_t>(x));
+  }
+  if (v.size() != 3 || v[0] == 0 || v[1] == 0)
+    throw SceneError("--samples: '" + text + "' is not R,P,REFINE (R and P at least 1)");
+  options.region_samples = v[0];
+  options.polygon_samples = v[1];
+  options.refine_rays = v[2];
+  return options;
 }
 
 struct QueryTiming {
@@ -89,8 +122,14 @@ QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) 
 }
 
 int runBuild(const BuildArgs& args) {
-  if (args.tree != "pfd") throw SceneError("--tree: only 'pfd' is built so far (got '" + args.tree + "')");
+  if (args.tree != "pfd" && args.tree != "hfd") throw SceneError("--tree: expected pfd or hfd, got '" + args.tree + "'");
+  const bool hfd = args.tree == "hfd";
+  if (!hfd && !args.samples.empty()) throw SceneError("--samples: only for --tree hfd");
+  VisibilityOptions vis_options;
+  vis_options.seed = args.visibility_seed;
+  vis_options = parseSamples(args.samples, vis_options);
   PfdLevelOptions options;
+  options.tree.drop_back_faces = !args.keep_back_faces;
   options.max_memory = parseSize(args.max_memory, "--max-memory");
   options.cell_memory = parseSize(args.cell_memory, "--cell-memory");
   if (args.heuristic == "balanced") options.tree.heuristic = PfdHeuristic::kBalanced;
@@ -111,29 +150,62 @@ int runBuild(const BuildArgs& args) {
   file.bsp = buildBsp(scene);
   progress("bsp: " + std::to_string(file.bsp.stats.fragments) + " fragments, " + std::to_string(file.bsp.stats.nodes) +
            " nodes, " + std::to_string(file.bsp.stats.build_seconds) + " s");
+  std::optional<VisibilityScene> visibility;
+  double visibility_seconds = 0.0;
+  if (hfd) {
+    const auto v0 = std::chrono::steady_clock::now();
+    visibility = VisibilityScene::build(file.bsp, vis_options);
+    visibility_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - v0).count();
+    options.tree.visibility = &*visibility;
+    file.kind = TreeKind::kHfd;
+    file.visibility = vis_options;
+    progress("visibility scene: " + std::to_string(file.bsp.fragments.size()) + " blockers, samples " +
+             std::to_string(vis_options.region_samples) + "," + std::to_string(vis_options.polygon_samples) + "," +
+             std::to_string(vis_options.refine_rays) + ", " + std::to_string(visibility_seconds) + " s");
+  }
   uint64_t used = 0;
+  const auto build0 = std::chrono::steady_clock::now();
   for (size_t l = 0; l < scene.levels.size(); ++l) {
     progress("level " + std::to_string(l) + " of " + std::to_string(scene.levels.size()) + "...");
     file.levels.push_back(
         buildPfdLevel(file.bsp, scene.levels[l], static_cast<uint32_t>(l), scene.eye_height, options, used, progress));
   }
+  const double trees_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build0).count();
   saveTreeFile(file, args.output);
+  progress("wrote " + args.output);
 
   const double n = static_cast<double>(file.bsp.stats.fragments);
   const double log43 = n > 1 ? std::log(n) / std::log(4.0 / 3.0) : 0.0;
+  // The paper's size bound, N^1.5 · log_{4/3} n (N fragments, n input polygons).
+  const double n_input = static_cast<double>(file.bsp.stats.input_polygons);
+  const double entries_bound = std::pow(n, 1.5) * (n_input > 1 ? std::log(n_input) / std::log(4.0 / 3.0) : 0.0);
   nlohmann::ordered_json j;
   j["scene"] = scene.name;
   j["file"] = args.output;
+  j["tree"] = args.tree;
   j["eye_height"] = scene.eye_height;
   j["fragments"] = file.bsp.stats.fragments;
   j["bsp_nodes"] = file.bsp.stats.nodes;
   j["bsp_build_seconds"] = file.bsp.stats.build_seconds;
+  j["input_polygons"] = file.bsp.stats.input_polygons;
   j["log43_fragments"] = log43;
+  j["log43_N"] = log43;
+  j["entries_bound"] = entries_bound;
+  j["drop_back_faces"] = options.tree.drop_back_faces;
+  if (hfd) {
+    j["samples"] = {{"region", vis_options.region_samples},
+                    {"polygon", vis_options.polygon_samples},
+                    {"refine", vis_options.refine_rays},
+                    {"seed", vis_options.seed}};
+    j["visibility_scene_seconds"] = visibility_seconds;
+  }
+  j["trees_seconds"] = trees_seconds;
   j["max_memory"] = options.max_memory;
   j["cell_memory"] = options.cell_memory;
   j["heuristic"] = args.heuristic;
   j["dedup"] = !args.no_dedup;
   j["total_bytes"] = used;
+  uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0;
   auto trees = nlohmann::ordered_json::array();
   for (const PfdLevel& level : file.levels) {
     for (size_t c = 0; c < level.cells.size(); ++c) {
@@ -157,6 +229,21 @@ int runBuild(const BuildArgs& args) {
       e["bytes"] = s.bytes;
       e["view_cells"] = level.cells.size();
       e["build_seconds"] = s.build_seconds;
+      e["log43_N"] = log43;
+      e["entries_bound"] = entries_bound;
+      // Entries stored: run references in the lists plus fragment ids in the run pool.
+      e["stored_entries"] = s.list_entries + s.pool_entries;
+      e["within_entries_bound"] = static_cast<double>(s.list_entries + s.pool_entries) <= entries_bound;
+      if (static_cast<double>(s.list_entries + s.pool_entries) > entries_bound) ++over_bound;
+      if (hfd) {
+        e["visibility_tests"] = s.visibility_tests;
+        e["visibility_rays"] = s.visibility_rays;
+        e["hidden_rejected"] = s.hidden_rejected;
+      }
+      vis_tests += s.visibility_tests;
+      vis_rays += s.visibility_rays;
+      rejected += s.hidden_rejected;
+      ++total_cells;
       const QueryTiming qt = timeQueries(file.bsp, t, std::min<uint32_t>(args.stat_eyes, 2000));
       e["query_ns"] = qt.pfd_ns;
       e["query_runs_ns"] = qt.runs_ns;
@@ -171,13 +258,31 @@ int runBuild(const BuildArgs& args) {
     }
   }
   j["trees"] = trees;
+  j["view_cells"] = total_cells;
+  j["trees_over_entries_bound"] = over_bound;
+  if (hfd) {
+    j["visibility_tests"] = vis_tests;
+    j["visibility_rays"] = vis_rays;
+    j["hidden_rejected"] = rejected;
+    j["rays_per_second"] = trees_seconds > 0 ? static_cast<double>(vis_rays) / trees_seconds : 0.0;
+  }
   if (args.json) {
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
-  std::printf("scene %s: N = %llu fragments, log_{4/3} N = %.1f; wrote %s (%llu bytes of trees)\n", scene.name.c_str(),
-              static_cast<unsigned long long>(file.bsp.stats.fragments), log43, args.output.c_str(),
-              static_cast<unsigned long long>(used));
+  std::printf("scene %s: %s trees, N = %llu fragments, log_{4/3} N = %.1f, N^1.5 log_{4/3} n = %.3g; wrote %s "
+              "(%llu bytes of trees in %llu view cells, %.1f s)\n",
+              scene.name.c_str(), args.tree.c_str(), static_cast<unsigned long long>(file.bsp.stats.fragments), log43,
+              entries_bound, args.output.c_str(), static_cast<unsigned long long>(used),
+              static_cast<unsigned long long>(total_cells), trees_seconds);
+  if (hfd)
+    std::printf("hfd: %llu visibility tests, %llu rays (%.3g rays/s over the tree builds), %llu fragments rejected\n",
+                static_cast<unsigned long long>(vis_tests), static_cast<unsigned long long>(vis_rays),
+                trees_seconds > 0 ? static_cast<double>(vis_rays) / trees_seconds : 0.0,
+                static_cast<unsigned long long>(rejected));
+  if (over_bound > 0)
+    std::printf("warning: %llu trees store more than N^1.5 log_{4/3} n entries\n",
+                static_cast<unsigned long long>(over_bound));
   std::printf("%5s %4s %9s %9s %6s %8s %10s %11s %12s %12s %8s %9s %9s\n", "level", "cell", "height", "tests", "max",
               "entropy", "nodes", "list_refs", "pool", "bytes", "seconds", "query_ns", "bsp_ns");
   for (const auto& e : trees)
@@ -194,10 +299,24 @@ int runBuild(const BuildArgs& args) {
 
 void addBuildCommand(CLI::App& app, CommandRunner& runner) {
   auto args = std::make_shared<BuildArgs>();
-  auto* sub = app.add_subcommand("build", "Build the BSP and a PFD tree per floor level into one tree file");
+  auto* sub = app.add_subcommand(
+      "build",
+      "Build the BSP and a PFD or HFD tree per floor level (view cells where a tree exceeds --cell-memory) into one "
+      "tree file (versioned, checksummed, written atomically). Default memory budget: 1 GiB for all trees together, "
+      "64 MiB per view cell; exceeding the budget is an error (exit 2) naming the level, never an out-of-memory "
+      "crash. Progress on stderr.");
   addSceneArgs(*sub, args->scene);
   sub->add_option("-o,--output", args->output, "Tree file to write")->required();
-  sub->add_option("--tree", args->tree, "Tree kind: pfd");
+  sub->add_option("--tree", args->tree, "Tree kind: pfd, or hfd (hidden fragments rejected by sampled visibility)")
+      ->check(CLI::IsMember({"pfd", "hfd"}));
+  sub->add_option("--samples", args->samples,
+                  "hfd: R,P,REFINE = region samples, polygon samples, refinement rays per visibility test (default " +
+                      std::to_string(VisibilityOptions{}.region_samples) + "," +
+                      std::to_string(VisibilityOptions{}.polygon_samples) + "," +
+                      std::to_string(VisibilityOptions{}.refine_rays) + ")");
+  sub->add_option("--visibility-seed", args->visibility_seed, "hfd: seed of the visibility sampling");
+  sub->add_flag("--keep-back-faces", args->keep_back_faces,
+                "List back-facing fragments too (for run-time backface methods); default: dropped at build");
   sub->add_option("--max-memory", args->max_memory, "Budget for all trees together (e.g. 512M, 2G; default 1G)");
   sub->add_option("--cell-memory", args->cell_memory,
                   "A tree over this many bytes is cut into four view cells (default 64M; 0: never)");

@@ -26,6 +26,9 @@ int main(int argc, char** argv) {
   addBenchCommand(app, runner);
   addValidateCommand(app, runner);
   addBuildCommand(app, runner);
+  addRenderCommand(app, runner);
+  addWalkCommand(app, runner);
+  addStatsCommand(app, runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,67 @@
+// Backface culling inside priority lists (issue 6; DESIGN.md "Facing at emission"): a PFD/HFD
+// query yields a handful of runs (ranges of one index array); each run gets its own culling
+// structure, built once per tree (clusters formed per run), tested per frame for the runs a query
+// yields. Also the whole-scene case (the BSP path and the z-buffer baseline): one run of all.
+//
+// Methods: none | polygon | mask | cluster | hierarchy | region. `region` is the exact build-time
+// method: a tree built with drop_back_faces lists only front faces for every eye of the height
+// plane, so nothing is left to do at run time; on a path without such lists (BSP, z-buffer) it
+// falls back to the per-polygon plane test.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "backface/backface.h"
+
+namespace walkvis {
+
+enum class ListCullMethod : uint8_t { kNone, kPolygon, kMask, kCluster, kHierarchy, kRegion };
+std::string_view listCullMethodName(ListCullMethod method);
+ListCullMethod parseListCullMethod(std::string_view name);  // SceneError naming the choices otherwise
+
+struct IndexRange {
+  uint32_t first = 0;  // into the index array given to build()
+  uint32_t count = 0;
+};
+
+class ListCuller {
+ public:
+  // One culling structure per range of `indices` (polygon indices into input.polygons). Ranges may
+  // overlap or repeat; empty ranges are allowed. Throws SceneError for a bad option or index
+  // (mask_use_view_cone is refused: it may cull front faces outside the view cone). mask: each
+  // range is cut into chunks of options.mask_group_size positions (0: one chunk), each with its
+  // own view cone, except that a chunk shorter than options.mask_list_min_chunk gets the plane
+  // test (a table costs more than the plane test on ~1,000 polygons); cluster, hierarchy:
+  // clusters are formed per range; cluster's culling probability is over options.cluster_eye_lo/hi,
+  // by default the box of all input.vertices (the eyes of a walkthrough are inside the scene).
+  static ListCuller build(const BackfaceInput& input, std::span<const uint32_t> indices,
+                          std::span<const IndexRange> ranges, ListCullMethod method,
+                          const BackfaceOptions& options = {});
+  ListCuller(ListCuller&&) noexcept;
+  ListCuller& operator=(ListCuller&&) noexcept;
+  ~ListCuller();
+
+  // Appends the polygons of range `range` that survive culling for `view`, in the range's order,
+  // to `out`; returns how many were culled. Never culls a polygon front-facing at view.eye. No
+  // allocation once `out` has the capacity (capacity for out.size() + the range's count).
+  // Not thread-safe for kCluster and kHierarchy (a scratch buffer of unit flags; tracking state):
+  // one ListCuller per thread there. kRegion runs the plane test of kPolygon (a caller that knows
+  // its lists hold only front faces, drop_back_faces, need not call cullRange at all).
+  // Throws SceneError for a range index out of range.
+  uint32_t cullRange(uint32_t range, const BackfaceView& view, std::vector<uint32_t>& out) const;
+
+  ListCullMethod method() const;
+  size_t rangeCount() const;
+  uint64_t bytes() const;  // per-frame test state of all ranges
+
+ private:
+  struct Impl;
+  explicit ListCuller(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace walkvis

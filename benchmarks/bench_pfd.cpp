@@ -1,0 +1,239 @@
+// Query time of the PFD tree (James & Day 1998; DESIGN.md "PFD tree") against the BSP
+// back-to-front traversal it replaces (Fuchs, Kedem & Naylor 1980), on one level of a scene with
+// pre-sampled eyes on its height plane, both with back faces skipped (the same sequence of
+// fragment ids). Counters: plane_tests = plane tests per query (PFD: internal nodes on the path;
+// BSP: one side test per node visited, i.e. every node), ids = fragment ids per query, runs =
+// runs per query (pfdQueryRuns).
+//
+//   bench_pfd [--scenes=gen:office,freedoom2.wad:MAP01] [--level=largest|INDEX] [--eyes=4096]
+//             [google benchmark flags, e.g. --benchmark_min_time=0.2]
+// The tree is built as `walkvis build` builds it (buildPfdLevel: view cells above 64 MiB); each
+// eye is queried in the cell that holds it (resolved once, before timing, as a walkthrough does
+// when it changes cells).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bsp/bsp.h"
+#include "pfd_hfd/pfd.h"
+#include "scenes/scene.h"
+
+namespace walkvis {
+namespace {
+
+struct BenchLevel {
+  std::string name;
+  BspTree bsp;
+  PfdLevel level;
+  std::vector<glm::dvec3> eyes;         // random eyes of the level's region
+  std::vector<const PfdTree*> trees;    // the cell tree of each eye
+  std::vector<glm::dvec3> walk;         // a path of small steps (frame coherence)
+  std::vector<const PfdTree*> walk_trees;
+};
+
+glm::dvec3 sampleLevel(const PfdLevel& level, uint64_t& state) {
+  double total = 0.0;
+  for (const PfdTree& t : level.cells) total += t.region.empty() ? 0.0 : t.stats.region_area;
+  state = state * 6364136223846793005ull + 1442695040888963407ull;
+  double pick = static_cast<double>(state >> 11) * 0x1.0p-53 * total;
+  size_t c = 0, last = 0;
+  for (; c < level.cells.size(); ++c) {
+    const double a = level.cells[c].region.empty() ? 0.0 : level.cells[c].stats.region_area;
+    if (!(a > 0.0)) continue;
+    last = c;
+    if (pick < a) break;
+    pick -= a;
+  }
+  if (c == level.cells.size()) c = last;
+  const glm::dvec2 p = samplePfdRegion(level.cells[c], state);
+  return {p.x, level.height, p.y};
+}
+
+// Strictly inside one of the tree's convex region pieces (either winding), in doubles: a step
+// between two eyes of a non-convex walkable region may leave it (into a wall), where the tree's
+// order is not defined.
+bool insideRegion(const PfdTree& tree, const glm::dvec3& eye) {
+  for (const auto& ring : tree.region) {
+    size_t pos = 0, neg = 0;
+    for (size_t i = 0; i < ring.size(); ++i) {
+      const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
+      const double c = (b.x - a.x) * (eye.z - a.y) - (b.y - a.y) * (eye.x - a.x);
+      pos += c > 0;
+      neg += c < 0;
+    }
+    if (pos == ring.size() || neg == ring.size()) return true;
+  }
+  return false;
+}
+
+std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& level_choice, uint32_t eye_count) {
+  auto b = std::make_shared<BenchLevel>();
+  const Scene scene = loadScene(spec);
+  if (scene.levels.empty()) throw SceneError(spec + ": no walkable level");
+  size_t li = 0;
+  if (level_choice == "largest") {
+    for (size_t l = 1; l < scene.levels.size(); ++l)
+      if (scene.levels[l].walkable_area > scene.levels[li].walkable_area) li = l;
+  } else {
+    li = std::stoul(level_choice);
+    if (li >= scene.levels.size()) throw SceneError(spec + ": no level " + level_choice);
+  }
+  b->bsp = buildBsp(scene);
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 0;
+  uint64_t used = 0;
+  b->level = buildPfdLevel(b->bsp, scene.levels[li], static_cast<uint32_t>(li), scene.eye_height, options, used);
+  uint64_t state = 42;
+  while (b->eyes.size() < eye_count) {
+    const glm::dvec3 e = sampleLevel(b->level, state);
+    if (const PfdTree* t = findPfdCell(b->level, e)) {
+      b->eyes.push_back(e);
+      b->trees.push_back(t);
+    }
+  }
+  // A walk: steps of 1/200 of the way to the next random eye, while they stay in one cell.
+  glm::dvec3 at = b->eyes[0];
+  const PfdTree* at_tree = b->trees[0];
+  for (size_t k = 1; b->walk.size() < eye_count; k = (k + 1) % b->eyes.size()) {
+    const glm::dvec3 to = b->eyes[k];
+    for (int s = 1; s <= 200 && b->walk.size() < eye_count; ++s) {
+      const glm::dvec3 p = at + (to - at) * (s / 200.0);
+      const PfdTree* t = findPfdCell(b->level, p);
+      if (!t || !insideRegion(*t, p)) break;
+      b->walk.push_back(p);
+      b->walk_trees.push_back(t);
+    }
+    if (b->walk.empty()) {  // the first step already left the region: start from an eye
+      b->walk.push_back(b->eyes[k]);
+      b->walk_trees.push_back(b->trees[k]);
+    }
+    at = b->walk.back();
+    at_tree = b->walk_trees.back();
+  }
+  (void)at_tree;
+  uint64_t bytes = 0;
+  for (const PfdTree& t : b->level.cells) bytes += t.stats.bytes;
+  std::fprintf(stderr, "%s level %zu: N = %zu fragments, %zu BSP nodes, %zu view cells, %llu tree bytes\n",
+               spec.c_str(), li, b->bsp.fragments.size(), b->bsp.nodes.size(), b->level.cells.size(),
+               static_cast<unsigned long long>(bytes));
+  b->name = spec + "/level" + std::to_string(li);
+  return b;
+}
+
+void setCounters(benchmark::State& state, double tests, double ids, const BenchLevel& b) {
+  state.counters["plane_tests"] = benchmark::Counter(tests, benchmark::Counter::kAvgIterations);
+  state.counters["ids"] = benchmark::Counter(ids, benchmark::Counter::kAvgIterations);
+  state.counters["N"] = static_cast<double>(b.bsp.fragments.size());
+}
+
+void benchPfdQuery(benchmark::State& state, std::shared_ptr<BenchLevel> b) {
+  std::vector<uint32_t> order;
+  order.reserve(b->bsp.fragments.size());
+  size_t k = 0;
+  double tests = 0, ids = 0;
+  for (auto _ : state) {
+    const PfdQueryResult q = pfdQuery(*b->trees[k], b->eyes[k], order);
+    benchmark::DoNotOptimize(order.data());
+    tests += q.tests;
+    ids += static_cast<double>(order.size());
+    k = k + 1 == b->eyes.size() ? 0 : k + 1;
+  }
+  setCounters(state, tests, ids, *b);
+}
+
+void benchPfdQueryRuns(benchmark::State& state, std::shared_ptr<BenchLevel> b) {
+  std::vector<PfdRun> runs;
+  runs.reserve(b->bsp.fragments.size());
+  size_t k = 0;
+  double tests = 0, ids = 0, run_count = 0;
+  for (auto _ : state) {
+    const PfdQueryResult q = pfdQueryRuns(*b->trees[k], b->eyes[k], runs);
+    benchmark::DoNotOptimize(runs.data());
+    tests += q.tests;
+    run_count += static_cast<double>(runs.size());
+    for (const PfdRun& r : runs) ids += r.count;
+    k = k + 1 == b->eyes.size() ? 0 : k + 1;
+  }
+  setCounters(state, tests, ids, *b);
+  state.counters["runs"] = benchmark::Counter(run_count, benchmark::Counter::kAvgIterations);
+}
+
+// walk = true: consecutive eyes a small step apart (the case frame coherence is for); false:
+// independent random eyes (its worst case).
+void benchPfdQueryCoherent(benchmark::State& state, std::shared_ptr<BenchLevel> b, bool walk) {
+  const auto& eyes = walk ? b->walk : b->eyes;
+  const auto& trees = walk ? b->walk_trees : b->trees;
+  std::vector<uint32_t> order;
+  order.reserve(b->bsp.fragments.size());
+  PfdCursor cursor;
+  size_t k = 0;
+  double tests = 0, ids = 0;
+  for (auto _ : state) {
+    const PfdQueryResult q = pfdQueryCoherent(*trees[k], eyes[k], cursor, order);
+    benchmark::DoNotOptimize(order.data());
+    tests += q.tests;
+    ids += static_cast<double>(order.size());
+    k = k + 1 == eyes.size() ? 0 : k + 1;
+  }
+  setCounters(state, tests, ids, *b);
+}
+
+void benchBsp(benchmark::State& state, std::shared_ptr<BenchLevel> b) {
+  std::vector<uint32_t> order;
+  order.reserve(b->bsp.fragments.size());
+  size_t k = 0;
+  double ids = 0;
+  for (auto _ : state) {
+    backToFront(b->bsp, b->eyes[k], order, true);
+    benchmark::DoNotOptimize(order.data());
+    ids += static_cast<double>(order.size());
+    k = k + 1 == b->eyes.size() ? 0 : k + 1;
+  }
+  // The traversal decides the side of every node's plane once per query.
+  setCounters(state, static_cast<double>(state.iterations()) * static_cast<double>(b->bsp.nodes.size()), ids, *b);
+}
+
+}  // namespace
+}  // namespace walkvis
+
+int main(int argc, char** argv) {
+  using namespace walkvis;
+  std::string scenes = "gen:office,freedoom2.wad:MAP01";
+  std::string level = "largest";
+  uint32_t eyes = 4096;
+  std::vector<char*> rest{argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--scenes=", 9) == 0) scenes = argv[i] + 9;
+    else if (std::strncmp(argv[i], "--level=", 8) == 0) level = argv[i] + 8;
+    else if (std::strncmp(argv[i], "--eyes=", 7) == 0) eyes = static_cast<uint32_t>(std::max(1l, std::atol(argv[i] + 7)));
+    else rest.push_back(argv[i]);
+  }
+  int rest_argc = static_cast<int>(rest.size());
+  benchmark::Initialize(&rest_argc, rest.data());
+  std::stringstream ss(scenes);
+  std::string spec;
+  try {
+    while (std::getline(ss, spec, ',')) {
+      const auto b = prepare(spec, level, eyes);
+      benchmark::RegisterBenchmark((b->name + "/pfdQuery").c_str(), benchPfdQuery, b);
+      benchmark::RegisterBenchmark((b->name + "/pfdQueryRuns").c_str(), benchPfdQueryRuns, b);
+      benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/random").c_str(), benchPfdQueryCoherent, b, false);
+      benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/walk").c_str(), benchPfdQueryCoherent, b, true);
+      benchmark::RegisterBenchmark((b->name + "/bspBackToFront").c_str(), benchBsp, b);
+    }
+  } catch (const SceneError& e) {
+    std::fprintf(stderr, "bench_pfd: %s\n", e.what());
+    return 2;
+  }
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

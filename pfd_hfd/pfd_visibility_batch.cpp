@@ -1,0 +1,27 @@
+// A batch of HFD visibility queries (James & Day, "The hidden face determination tree", 1998:
+// the area-to-area test at list promotion) run in parallel with TBB.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "pfd_hfd/pfd_internal.h"
+
+namespace walkvis {
+
+void visibleBatch(const VisibilityScene& vis, std::span<const uint32_t> fragments,
+                  std::span<const std::vector<glm::dvec2>> region, double height, std::span<uint8_t> visible,
+                  VisibilityCounters& counters) {
+  const size_t n = fragments.size();
+  if (n == 0) return;
+  if (n == 1) {
+    visible[0] = vis.visibleFromRegion(fragments[0], region, height, counters) ? 1 : 0;
+    return;
+  }
+  std::vector<VisibilityCounters> each(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i)
+      visible[i] = vis.visibleFromRegion(fragments[i], region, height, each[i]) ? 1 : 0;
+  });
+  for (const VisibilityCounters& c : each) counters.add(c);
+}
+
+}  // namespace walkvis

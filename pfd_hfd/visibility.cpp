@@ -1,0 +1,705 @@
+// Point-sampled area-to-area visibility for the HFD tree (James & Day, "The hidden face
+// determination tree", 1998: "acceptable visual results can be gained with point sampling"), with
+// occlusion rays through Embree 3 (Wald et al., "Embree: A Kernel Framework for Efficient CPU Ray
+// Tracing", SIGGRAPH 2014).
+//
+// What counts as seen matches the exact reference of walkthrough/raycast.h: only FRONT sides are
+// drawn, so a blocker stops a ray only when the ray meets its front side (an intersection filter
+// drops back-side hits), and the target counts as seen only from eyes in its front half-space.
+//
+// Sampling (DESIGN.md "What is already known": uniform samples miss walls seen through doors):
+//  1. uniform: region corners, points along the region's edges and area-stratified interior points,
+//     against the target's (inset) corners and area-stratified interior points, paired in a
+//     diagonal order so that the first rays already use every eye and every target point;
+//  2. refinement by stepping past blocker edges: a blocked ray's nearest blocker (the input
+//     polygon it belongs to, so a wall cut into fragments by the BSP is stepped over at once) is
+//     passed just beyond each of its nearest edges, either by moving the target point (the ray
+//     from the same eye through the point just past the edge, continued to the target) or by
+//     moving the eye (the line from the same target point through that point, continued to the
+//     height plane). Chains of such steps find rays through door and window openings and around
+//     jambs; they start from seeds that favour the region's corners and boundary.
+// Everything is deterministic in (options.seed, fragment, region, height).
+#include "pfd_hfd/visibility.h"
+
+#include <embree3/rtcore.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <string>
+
+namespace walkvis {
+namespace {
+
+// The ray stops this far (times the scene's extent, measured along the target's normal) in front
+// of the target's plane. Embree works in single precision on coordinates relative to the scene's
+// centre, whose rounding is 2^-24 ≈ 6e-8 of the extent: 1e-5 is over 100 times that, so neither
+// the target nor its coplanar neighbours (other fragments of the same wall) can be hit, while a
+// real blocker is missed only when it lies within 1e-5 of the extent of the target's plane (a
+// decal on it), which hides at most a sliver.
+constexpr double kEndGap = 1e-5;
+// Grazing rays end nearer the target (see castClear), but never nearer than this: 16 times the
+// single-precision rounding of coordinates.
+constexpr double kMinGap = 1e-6;
+// Region samples are kept this far (times the extent) inside their piece: a region edge usually
+// lies on a wall's plane, and an eye exactly on a wall could see through it in single precision.
+// An eye that close to a wall sees nothing a sample this far away does not, up to a sliver.
+constexpr double kRegionInset = 1e-5;
+// Target samples are pulled towards the centroid by this fraction (at least), and by the end gap
+// in absolute terms: a point on the target's edge lies on the edge of its neighbours too (a
+// perpendicular wall at a corner), whose single-precision triangles could stop the ray.
+constexpr double kTargetShrink = 1e-3;
+// Stepping past a blocker edge: the new ray passes this fraction of the eye-to-hit distance beyond
+// the edge (at least the end gap): small enough to get through an opening 1/1000 of the view
+// wide, large enough not to graze the edge's own polygon in single precision.
+constexpr double kStepMargin = 1e-3;
+constexpr uint32_t kMaxStepDepth = 6;  // steps chained from one seed ray
+
+uint64_t splitmix(uint64_t& state) {
+  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+double uniform01(uint64_t& state) { return static_cast<double>(splitmix(state) >> 11) * 0x1.0p-53; }
+uint64_t mixHash(uint64_t h, uint64_t v) {
+  uint64_t s = h ^ (v + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2));
+  return splitmix(s);
+}
+
+double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
+
+// Closest point of segment [a, b] to p.
+template <typename V>
+V closestOnSegment(const V& a, const V& b, const V& p) {
+  const V ab = b - a;
+  const double len2 = glm::dot(ab, ab);
+  if (!(len2 > 0.0)) return a;
+  const double t = std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0);
+  return a + t * ab;
+}
+
+// A convex polygon of the plane, counter-clockwise.
+struct Convex2 {
+  std::vector<glm::dvec2> v;
+  double area = 0.0;
+  glm::dvec2 centroid{0.0};
+};
+
+bool insideConvex(const std::vector<glm::dvec2>& poly, const glm::dvec2& p) {
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i)
+    if (cross2(poly[(i + 1) % n] - poly[i], p - poly[i]) < 0.0) return false;
+  return true;
+}
+
+glm::dvec2 closestInConvex(const std::vector<glm::dvec2>& poly, const glm::dvec2& p, double& dist2) {
+  if (insideConvex(poly, p)) {
+    dist2 = 0.0;
+    return p;
+  }
+  glm::dvec2 best = poly[0];
+  dist2 = std::numeric_limits<double>::infinity();
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec2 q = closestOnSegment(poly[i], poly[(i + 1) % n], p);
+    const double d2 = glm::dot(q - p, q - p);
+    if (d2 < dist2) {
+      dist2 = d2;
+      best = q;
+    }
+  }
+  return best;
+}
+
+// The part of a convex polygon where g·q + c0 >= 0 (Sutherland–Hodgman with one edge), into
+// `out`; false when it is empty or degenerate.
+bool clipHalfPlane(const std::vector<glm::dvec2>& poly, const glm::dvec2& g, double c0, std::vector<glm::dvec2>& out) {
+  out.clear();
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec2& p = poly[i];
+    const glm::dvec2& q = poly[(i + 1) % n];
+    const double fp = glm::dot(g, p) + c0, fq = glm::dot(g, q) + c0;
+    if (fp >= 0.0) out.push_back(p);
+    if ((fp >= 0.0) != (fq >= 0.0)) out.push_back(p + (fp / (fp - fq)) * (q - p));
+  }
+  return out.size() >= 3;
+}
+
+// Pulls p towards c by `gap` (absolute) and at least the fraction `shrink`, but never past c.
+glm::dvec2 pullTowards(const glm::dvec2& p, const glm::dvec2& c, double shrink, double gap) {
+  const double len = glm::length(p - c);
+  if (!(len > 0.0)) return c;
+  const double f = std::min(0.5, std::max(shrink, gap / len));
+  return p + f * (c - p);
+}
+
+// Random point of a convex polygon by area (fan triangles), from two uniform numbers.
+glm::dvec2 pointInConvex(const Convex2& poly, double u, double w, std::vector<double>& cum) {
+  const auto& v = poly.v;
+  cum.clear();
+  double total = 0.0;
+  for (size_t k = 1; k + 1 < v.size(); ++k) {
+    total += std::abs(cross2(v[k] - v[0], v[k + 1] - v[0]));
+    cum.push_back(total);
+  }
+  if (!(total > 0.0)) return poly.centroid;
+  const double pick = u * total;
+  size_t k = std::lower_bound(cum.begin(), cum.end(), pick) - cum.begin();
+  if (k >= cum.size()) k = cum.size() - 1;
+  const double lo = k == 0 ? 0.0 : cum[k - 1];
+  double a = (pick - lo) / std::max(cum[k] - lo, 1e-300);  // reuse the remainder as one coordinate
+  a = std::clamp(a, 0.0, 1.0);
+  double b = w;
+  if (a + b > 1.0) {
+    a = 1.0 - a;
+    b = 1.0 - b;
+  }
+  return v[0] + a * (v[k + 1] - v[0]) + b * (v[k + 2] - v[0]);
+}
+
+// Convex hull (Andrew's monotone chain), counter-clockwise, collinear points dropped.
+std::vector<glm::dvec2> convexHull(std::vector<glm::dvec2> pts) {
+  std::sort(pts.begin(), pts.end(), [](const glm::dvec2& a, const glm::dvec2& b) {
+    return a.x < b.x || (a.x == b.x && a.y < b.y);
+  });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  std::vector<glm::dvec2> hull(2 * pts.size());
+  size_t k = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross2(hull[k - 1] - hull[k - 2], pts[i] - hull[k - 2]) <= 0.0) --k;
+    hull[k++] = pts[i];
+  }
+  for (size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross2(hull[k - 1] - hull[k - 2], pts[i - 1] - hull[k - 2]) <= 0.0) --k;
+    hull[k++] = pts[i - 1];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+// An orthonormal basis (u, w) of a plane with u × w = n, so counter-clockwise seen from the front
+// is counter-clockwise in (u, w).
+void planeBasis(const glm::dvec3& n, glm::dvec3& u, glm::dvec3& w) {
+  const glm::dvec3 a = std::abs(n.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+  u = glm::normalize(glm::cross(a, n));
+  w = glm::cross(n, u);
+}
+
+struct Hit {
+  uint32_t fragment = 0;
+  double t = 0.0;  // along the unnormalised direction (target - eye)
+};
+
+struct Probe {
+  glm::dvec3 eye;
+  glm::dvec3 target;
+  uint32_t depth = 0;
+  uint32_t key = 0;    // best first: chain depth plus the rank of the edge stepped past
+  uint32_t order = 0;  // ties: first pushed, first cast (deterministic)
+  bool operator>(const Probe& o) const { return key != o.key ? key > o.key : order > o.order; }
+};
+
+// Per-thread working memory, reused across queries so that a warm thread allocates nothing.
+struct Scratch {
+  std::vector<Convex2> pieces;
+  std::vector<double> piece_cum;
+  std::vector<double> tri_cum;
+  std::vector<glm::dvec3> eyes;
+  std::vector<glm::dvec3> targets;
+  std::vector<glm::dvec2> clip;
+  std::vector<glm::dvec2> target2;  // the target in its plane basis, counter-clockwise, inset
+  std::vector<Probe> queue;  // a binary heap on Probe::operator>
+  std::vector<std::pair<double, uint32_t>> edge_order;
+};
+
+Scratch& scratch() {
+  thread_local Scratch s;
+  return s;
+}
+
+}  // namespace
+
+struct VisibilityScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  VisibilityOptions options;
+  glm::dvec3 origin{0.0};
+  double extent = 1.0;
+  std::vector<glm::dvec3> vertices;       // fragment vertices (copy of the BSP's)
+  std::vector<Polygon> fragments;
+  std::vector<uint32_t> triangle_fragment;
+  std::vector<glm::vec3> fragment_normal;  // single precision, for the intersection filter
+  // Per fragment, the outline of its input polygon (convex hull of all that polygon's fragments):
+  // outline_vertices[outline_first[o], outline_first[o + 1]), counter-clockwise from the front.
+  std::vector<uint32_t> fragment_outline;
+  std::vector<uint32_t> outline_first;
+  std::vector<glm::dvec3> outline_vertices;
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+
+  glm::vec3 rel(const glm::dvec3& p) const { return glm::vec3(p - origin); }
+
+  // Occlusion of the segment eye + t (target - eye), t in [0, tfar]. With `hit`, the nearest
+  // front-side blocker is reported (rtcIntersect1), otherwise any (rtcOccluded1).
+  bool blocked(const glm::dvec3& eye, const glm::dvec3& target, double tfar, Hit* hit) const {
+    const glm::vec3 o = rel(eye);
+    const glm::dvec3 d = target - eye;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    if (!hit) {
+      RTCRay ray{};
+      ray.org_x = o.x, ray.org_y = o.y, ray.org_z = o.z;
+      ray.dir_x = static_cast<float>(d.x), ray.dir_y = static_cast<float>(d.y), ray.dir_z = static_cast<float>(d.z);
+      ray.tnear = 0.0f;
+      ray.tfar = static_cast<float>(tfar);
+      ray.mask = ~0u;
+      rtcOccluded1(scene, &context, &ray);
+      return ray.tfar < 0.0f;  // Embree marks an occluded ray with tfar = -inf
+    }
+    RTCRayHit rh{};
+    rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
+    rh.ray.dir_x = static_cast<float>(d.x), rh.ray.dir_y = static_cast<float>(d.y),
+    rh.ray.dir_z = static_cast<float>(d.z);
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = static_cast<float>(tfar);
+    rh.ray.mask = ~0u;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    hit->fragment = triangle_fragment[rh.hit.primID];
+    hit->t = rh.ray.tfar;
+    return true;
+  }
+};
+
+namespace {
+
+void filterFrontSide(const RTCFilterFunctionNArguments* args) {
+  const auto* normals = static_cast<const glm::vec3*>(args->geometryUserPtr);
+  for (unsigned k = 0; k < args->N; ++k) {
+    if (args->valid[k] != -1) continue;
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, k);
+    const glm::vec3& n = normals[prim];
+    const float dn = n.x * RTCRayN_dir_x(args->ray, args->N, k) + n.y * RTCRayN_dir_y(args->ray, args->N, k) +
+                     n.z * RTCRayN_dir_z(args->ray, args->N, k);
+    // A ray leaving a polygon's front or running in its plane is not stopped: back faces are not
+    // drawn (raycast.h), and a polygon seen edge-on covers nothing.
+    if (!(dn < 0.0f)) args->valid[k] = 0;
+  }
+}
+
+}  // namespace
+
+VisibilityScene::VisibilityScene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+VisibilityScene::VisibilityScene(VisibilityScene&&) noexcept = default;
+VisibilityScene& VisibilityScene::operator=(VisibilityScene&&) noexcept = default;
+VisibilityScene::~VisibilityScene() = default;
+
+const VisibilityOptions& VisibilityScene::options() const { return impl_->options; }
+
+bool VisibilityScene::occluded(const glm::dvec3& from, const glm::dvec3& to) const {
+  return impl_->blocked(from, to, 1.0, nullptr);
+}
+
+VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptions& options) {
+  auto impl = std::make_unique<Impl>();
+  Impl& s = *impl;
+  s.options = options;
+  s.vertices = bsp.vertices;
+  s.fragments = bsp.fragments;
+  if (!s.vertices.empty()) {
+    glm::dvec3 lo = s.vertices[0], hi = s.vertices[0];
+    for (const auto& v : s.vertices) {
+      lo = glm::min(lo, v);
+      hi = glm::max(hi, v);
+    }
+    s.origin = 0.5 * (lo + hi);
+    s.extent = std::max(glm::length(hi - lo), 1e-300);
+    if (!std::isfinite(s.extent)) throw SceneError("visibility: scene bounds are not finite");
+  }
+
+  // Outlines: the convex hull of each input polygon's fragments, in that polygon's plane.
+  const size_t nf = s.fragments.size();
+  s.fragment_outline.assign(nf, 0);
+  {
+    std::vector<uint32_t> order(nf);
+    for (uint32_t f = 0; f < nf; ++f) order[f] = f;
+    auto key = [&](uint32_t f) { return f < bsp.fragment_polygon.size() ? bsp.fragment_polygon[f] : f; };
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    std::vector<glm::dvec2> pts;
+    s.outline_first.push_back(0);
+    for (size_t i = 0; i < nf;) {
+      size_t j = i;
+      while (j < nf && key(order[j]) == key(order[i])) ++j;
+      const Plane& pl = s.fragments[order[i]].plane;
+      glm::dvec3 u, w;
+      planeBasis(pl.n, u, w);
+      const glm::dvec3 base = pl.n * pl.d;
+      pts.clear();
+      for (size_t k = i; k < j; ++k)
+        for (const auto& v : bsp.fragmentVertices(order[k])) pts.push_back({glm::dot(v - base, u), glm::dot(v - base, w)});
+      const std::vector<glm::dvec2> hull = convexHull(pts);
+      const uint32_t o = static_cast<uint32_t>(s.outline_first.size() - 1);
+      for (const auto& h : hull) s.outline_vertices.push_back(base + h.x * u + h.y * w);
+      s.outline_first.push_back(static_cast<uint32_t>(s.outline_vertices.size()));
+      for (size_t k = i; k < j; ++k) s.fragment_outline[order[k]] = o;
+      i = j;
+    }
+  }
+
+  s.device = rtcNewDevice(nullptr);
+  if (!s.device) throw SceneError("visibility: Embree rtcNewDevice failed");
+  std::vector<uint32_t> indices;
+  for (uint32_t f = 0; f < nf; ++f) {
+    const Polygon& p = s.fragments[f];
+    if (p.vertex_count < 3) continue;
+    for (uint32_t v = 1; v + 1 < p.vertex_count; ++v) {
+      indices.insert(indices.end(), {p.first_vertex, p.first_vertex + v, p.first_vertex + v + 1});
+      s.triangle_fragment.push_back(f);
+      s.fragment_normal.push_back(glm::vec3(p.plane.n));
+    }
+  }
+  s.scene = rtcNewScene(s.device);
+  // Watertight triangle tests: a ray through an edge shared by two blockers is not let through.
+  rtcSetSceneFlags(s.scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_HIGH);
+  if (!s.triangle_fragment.empty()) {
+    RTCGeometry geom = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), s.vertices.size()));
+    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(uint32_t), s.triangle_fragment.size()));
+    if (!vb || !ib) {
+      rtcReleaseGeometry(geom);
+      throw SceneError("visibility: Embree buffer allocation failed (error " +
+                       std::to_string(rtcGetDeviceError(s.device)) + ")");
+    }
+    for (size_t k = 0; k < s.vertices.size(); ++k) {
+      const glm::vec3 p = s.rel(s.vertices[k]);
+      vb[3 * k] = p.x, vb[3 * k + 1] = p.y, vb[3 * k + 2] = p.z;
+    }
+    std::copy(indices.begin(), indices.end(), ib);
+    rtcSetGeometryUserData(geom, s.fragment_normal.data());
+    rtcSetGeometryIntersectFilterFunction(geom, filterFrontSide);
+    rtcSetGeometryOccludedFilterFunction(geom, filterFrontSide);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(s.scene, geom);
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(s.scene);
+  if (rtcGetDeviceError(s.device) != RTC_ERROR_NONE) throw SceneError("visibility: Embree scene build failed");
+  return VisibilityScene(std::move(impl));
+}
+
+bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region,
+                                        double height, VisibilityCounters& counters) const {
+  const Impl& s = *impl_;
+  const VisibilityOptions& opt = s.options;
+  ++counters.tests;
+  if (fragment >= s.fragments.size()) return false;
+  const Polygon& target_poly = s.fragments[fragment];
+  if (target_poly.vertex_count < 3) return false;
+  Scratch& sc = scratch();
+  const double region_inset = kRegionInset * s.extent;
+  const double end_gap = kEndGap * s.extent;
+  const double min_gap = kMinGap * s.extent;
+
+  // Seed: the options' seed, the fragment, the region's vertices and the height.
+  uint64_t h = mixHash(opt.seed, fragment);
+  {
+    uint64_t bits;
+    std::memcpy(&bits, &height, 8);
+    h = mixHash(h, bits);
+    for (const auto& piece : region)
+      for (const auto& v : piece) {
+        std::memcpy(&bits, &v.x, 8);
+        h = mixHash(h, bits);
+        std::memcpy(&bits, &v.y, 8);
+        h = mixHash(h, bits);
+      }
+  }
+  uint64_t rng = h;
+
+  // Region pieces, counter-clockwise, zero-area ones dropped.
+  sc.pieces.clear();
+  double region_area = 0.0, perimeter = 0.0;
+  for (const auto& piece : region) {
+    if (piece.size() < 3) continue;
+    double a2 = 0.0;
+    glm::dvec2 c{0.0};
+    for (size_t i = 0; i < piece.size(); ++i) {
+      const double cr = cross2(piece[i], piece[(i + 1) % piece.size()]);
+      a2 += cr;
+      c += (piece[i] + piece[(i + 1) % piece.size()]) * cr;
+    }
+    if (!(std::abs(a2) > 0.0) || !std::isfinite(a2)) continue;
+    Convex2 cp;
+    cp.v = piece;
+    if (a2 < 0.0) std::reverse(cp.v.begin(), cp.v.end());
+    cp.area = 0.5 * std::abs(a2);
+    cp.centroid = c / (3.0 * a2);
+    for (size_t i = 0; i < cp.v.size(); ++i) perimeter += glm::length(cp.v[(i + 1) % cp.v.size()] - cp.v[i]);
+    region_area += cp.area;
+    sc.pieces.push_back(std::move(cp));
+  }
+  if (sc.pieces.empty()) return false;
+  auto eyeAt = [&](const glm::dvec2& p) { return glm::dvec3(p.x, height, p.y); };
+
+  // Target in its plane basis, pulled in from its edges.
+  const Plane& tp = target_poly.plane;
+  glm::dvec3 tu, tw;
+  planeBasis(tp.n, tu, tw);
+  const glm::dvec3 tbase = tp.n * tp.d;
+  sc.target2.clear();
+  glm::dvec2 tc{0.0};
+  for (uint32_t k = 0; k < target_poly.vertex_count; ++k) {
+    const glm::dvec3 v = s.vertices[target_poly.first_vertex + k] - tbase;
+    sc.target2.push_back({glm::dot(v, tu), glm::dot(v, tw)});
+    tc += sc.target2.back();
+  }
+  tc /= static_cast<double>(sc.target2.size());
+  for (auto& v : sc.target2) v = pullTowards(v, tc, kTargetShrink, end_gap);
+  Convex2 target_c;
+  target_c.v = sc.target2;
+  target_c.centroid = tc;
+  auto target3 = [&](const glm::dvec2& q) { return tbase + q.x * tu + q.y * tw; };
+
+  // Eye side: only eyes in the target's front half-space, at least 2 end gaps from its plane, can
+  // see it (nearer ones see it edge-on, and the ray would end before it starts).
+  auto eyeSide = [&](const glm::dvec3& e) { return glm::dot(tp.n, e) - tp.d; };
+  // Casts one ray; true when unblocked.
+  auto castClear = [&](const glm::dvec3& e, const glm::dvec3& p, Hit* hit) -> int {
+    const double side = eyeSide(e);
+    if (!(side > min_gap)) return -1;  // not a ray: the front side is not seen (or only edge-on)
+    // The ray's last stretch, within `gap` of the target's plane, is not cast. Its shadow on the
+    // plane runs from p towards the eye's foot for gap * (in-plane length / side); it must stay
+    // inside the target, or a blocker standing on the target's edge (a wall meeting it at a
+    // corner) could be skipped by a grazing ray. So the gap shrinks for grazing rays, down to
+    // min_gap; below that the target is seen too nearly edge-on to cast a ray to p.
+    const glm::dvec3 to_eye = e - p;
+    const glm::dvec2 w2{glm::dot(to_eye, tu), glm::dot(to_eye, tw)};
+    const double in_plane = glm::length(w2);
+    double gap = std::min(end_gap, 0.5 * side);
+    if (in_plane > 0.0) {
+      const glm::dvec3 pq = p - tbase;
+      const glm::dvec2 q{glm::dot(pq, tu), glm::dot(pq, tw)};
+      const glm::dvec2 u2 = w2 / in_plane;
+      double exit = std::numeric_limits<double>::infinity();
+      const size_t n = sc.target2.size();
+      for (size_t i = 0; i < n; ++i) {
+        const glm::dvec2 a = sc.target2[i], ab = sc.target2[(i + 1) % n] - a;
+        const double rate = cross2(ab, u2);
+        if (rate < 0.0) exit = std::min(exit, std::max(0.0, cross2(ab, q - a)) / -rate);
+      }
+      gap = std::min(gap, 0.5 * exit * side / in_plane);
+    }
+    if (!(gap >= min_gap)) return -1;
+    ++counters.rays;
+    const double tfar = 1.0 - gap / side;
+    return s.blocked(e, p, tfar, hit) ? 0 : 1;
+  };
+
+  // ---- 1. uniform samples ----
+  const uint32_t R = std::max<uint32_t>(1, opt.region_samples);
+  const uint32_t P = std::max<uint32_t>(1, opt.polygon_samples);
+  sc.eyes.clear();
+  {
+    // Corners: a quarter of the samples (all corners when fewer), then a quarter along the edges,
+    // the rest inside by area.
+    size_t corners = 0;
+    for (const auto& p : sc.pieces) corners += p.v.size();
+    const uint32_t n_corner = static_cast<uint32_t>(std::min<size_t>(corners, std::max<uint32_t>(1, R / 4)));
+    const uint32_t n_edge = std::min<uint32_t>(R - std::min(R, n_corner), std::max<uint32_t>(1, R / 4));
+    const uint32_t n_area = R - std::min(R, n_corner + n_edge);
+    const double stride = static_cast<double>(corners) / n_corner;
+    const double offset = uniform01(rng);
+    for (uint32_t k = 0; k < n_corner; ++k) {
+      size_t idx = static_cast<size_t>((k + offset) * stride) % corners;
+      for (const auto& p : sc.pieces) {
+        if (idx < p.v.size()) {
+          sc.eyes.push_back(eyeAt(pullTowards(p.v[idx], p.centroid, 0.0, region_inset)));
+          break;
+        }
+        idx -= p.v.size();
+      }
+    }
+    // Along the perimeter (stratified, one random offset).
+    const double off = uniform01(rng);
+    for (uint32_t k = 0; k < n_edge; ++k) {
+      double at = (k + off) / n_edge * perimeter;
+      bool done = false;
+      for (const auto& p : sc.pieces) {
+        for (size_t i = 0; i < p.v.size() && !done; ++i) {
+          const glm::dvec2 a = p.v[i], b = p.v[(i + 1) % p.v.size()];
+          const double len = glm::length(b - a);
+          if (at <= len || (&p == &sc.pieces.back() && i + 1 == p.v.size())) {
+            const glm::dvec2 q = len > 0.0 ? a + std::min(at / len, 1.0) * (b - a) : a;
+            sc.eyes.push_back(eyeAt(pullTowards(q, p.centroid, 0.0, region_inset)));
+            done = true;
+          }
+          at -= len;
+        }
+        if (done) break;
+      }
+    }
+    // Inside: stratified over the area (1D strata over the pieces' cumulative area, jittered).
+    sc.piece_cum.clear();
+    double acc = 0.0;
+    for (const auto& p : sc.pieces) sc.piece_cum.push_back(acc += p.area);
+    for (uint32_t k = 0; k < n_area; ++k) {
+      const double at = (k + uniform01(rng)) / n_area * region_area;
+      size_t pi = std::lower_bound(sc.piece_cum.begin(), sc.piece_cum.end(), at) - sc.piece_cum.begin();
+      if (pi >= sc.pieces.size()) pi = sc.pieces.size() - 1;
+      const glm::dvec2 q = pointInConvex(sc.pieces[pi], uniform01(rng), uniform01(rng), sc.tri_cum);
+      sc.eyes.push_back(eyeAt(pullTowards(q, sc.pieces[pi].centroid, 0.0, region_inset)));
+    }
+  }
+  sc.targets.clear();
+  {
+    const uint32_t n_corner = std::min<uint32_t>(static_cast<uint32_t>(sc.target2.size()), P / 2);
+    for (uint32_t k = 0; k < n_corner; ++k) sc.targets.push_back(target3(sc.target2[k * sc.target2.size() / n_corner]));
+    const uint32_t n_area = P - n_corner;
+    for (uint32_t k = 0; k < n_area; ++k) {
+      // Stratified in the first coordinate, which picks the fan triangle and one barycentric.
+      const double u = (k + uniform01(rng)) / n_area;
+      sc.targets.push_back(target3(pointInConvex(target_c, u, uniform01(rng), sc.tri_cum)));
+    }
+  }
+  const uint32_t ne = static_cast<uint32_t>(sc.eyes.size()), nt = static_cast<uint32_t>(sc.targets.size());
+  // Diagonal order: block b pairs eye i with target (b + i) mod nt, so every pair comes once and
+  // the first block already uses every eye.
+  for (uint64_t k = 0; k < static_cast<uint64_t>(ne) * nt; ++k) {
+    const uint32_t i = static_cast<uint32_t>(k % ne);
+    const uint32_t j = static_cast<uint32_t>((k / ne + i) % nt);
+    if (castClear(sc.eyes[i], sc.targets[j], nullptr) == 1) {
+      ++counters.visible;
+      return true;
+    }
+  }
+
+  // ---- 2. refinement: step past the edges of the nearest blockers ----
+  if (opt.refine_rays == 0) return false;
+  sc.queue.clear();
+  {
+    // Seeds: eyes in sample order (corners and edges first) each against a target point, spread
+    // over the uniform pairs.
+    const uint32_t seeds = std::max<uint32_t>(1, std::min<uint32_t>(opt.refine_rays / 16, ne * nt));
+    for (uint32_t k = 0; k < seeds; ++k) {
+      const uint32_t i = k % ne;
+      const uint32_t j = static_cast<uint32_t>((k / ne + k * 7 + 3) % nt);
+      sc.queue.push_back({sc.eyes[i], sc.targets[j], 0, 0, k});
+    }
+    std::make_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
+  }
+  uint32_t pushed = static_cast<uint32_t>(sc.queue.size());
+  auto push = [&](const glm::dvec3& e, const glm::dvec3& p, uint32_t depth, uint32_t key) {
+    sc.queue.push_back({e, p, depth, key, pushed++});
+    std::push_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
+  };
+  uint32_t budget = opt.refine_rays;
+  while (!sc.queue.empty() && budget > 0) {
+    std::pop_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
+    const Probe pr = sc.queue.back();
+    sc.queue.pop_back();
+    Hit hit;
+    const int r = castClear(pr.eye, pr.target, &hit);
+    if (r < 0) continue;
+    --budget;
+    if (r == 1) {
+      ++counters.visible;
+      return true;
+    }
+    const glm::dvec3 dir = pr.target - pr.eye;
+    const glm::dvec3 x = pr.eye + hit.t * dir;
+    if (pr.depth >= kMaxStepDepth) continue;
+    const uint32_t o = s.fragment_outline[hit.fragment];
+    const uint32_t of = s.outline_first[o], oc = s.outline_first[o + 1] - of;
+    if (oc < 3) continue;
+    const glm::dvec3 bn = s.fragments[hit.fragment].plane.n;
+    sc.edge_order.clear();
+    for (uint32_t k = 0; k < oc; ++k) {
+      const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
+      const glm::dvec3 q = closestOnSegment(a, b, x);
+      sc.edge_order.push_back({glm::dot(q - x, q - x), k});
+    }
+    std::sort(sc.edge_order.begin(), sc.edge_order.end());
+    const double margin = std::max(end_gap, kStepMargin * hit.t * glm::length(dir));
+    for (uint32_t m = 0; m < oc; ++m) {
+      const uint32_t k = sc.edge_order[m].second;
+      const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
+      const glm::dvec3 edge = b - a;
+      const double el = glm::length(edge);
+      if (!(el > 0.0)) continue;
+      // Outline counter-clockwise seen from the blocker's front: outside is to the edge's right.
+      const glm::dvec3 out = glm::normalize(glm::cross(edge, bn));
+      const glm::dvec3 xp = closestOnSegment(a, b, x) + margin * out;
+      // (a) Keep the eye, move the target point: the eye and the edge span a plane; target
+      // points on xp's side of it (by the margin scaled to the target's distance) are seen past
+      // the edge. The nearest such point of the inset target to the current one.
+      {
+        const glm::dvec3 m3 = glm::cross(edge, a - pr.eye);
+        const double ml = glm::length(m3);
+        if (ml > 0.0) {
+          const glm::dvec3 mn = m3 / ml;
+          const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
+          const double offset = margin * glm::length(dir) / std::max(hit.t * glm::length(dir), end_gap);
+          const glm::dvec2 g = sgn * glm::dvec2(glm::dot(mn, tu), glm::dot(mn, tw));
+          const double c0 = sgn * glm::dot(mn, tbase - a) - offset;  // keep g·q + c0 >= 0
+          if (clipHalfPlane(sc.target2, g, c0, sc.clip)) {
+            double d2c;
+            const glm::dvec3 t3 = tbase;
+            const glm::dvec3 q = pr.target - t3;
+            const glm::dvec2 q2 = closestInConvex(sc.clip, {glm::dot(q, tu), glm::dot(q, tw)}, d2c);
+            const glm::dvec3 p2 = target3(q2);
+            if (glm::length(p2 - pr.target) > end_gap) push(pr.eye, p2, pr.depth + 1, pr.key + 1);
+          }
+        }
+      }
+      // (b) Keep the target point, move the eye: the same with the plane through the target point
+      // and the edge, cut with the height plane; the nearest such point of the region.
+      {
+        const glm::dvec3 m3 = glm::cross(edge, a - pr.target);
+        const double ml = glm::length(m3);
+        if (ml > 0.0) {
+          const glm::dvec3 mn = m3 / ml;
+          const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
+          const double to_hit = std::max((1.0 - hit.t) * glm::length(dir), end_gap);
+          const double offset = margin * glm::length(dir) / to_hit;
+          const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
+          const double c0 = sgn * (mn.y * (height - a.y) - mn.x * a.x - mn.z * a.z) - offset;
+          double best = std::numeric_limits<double>::infinity();
+          glm::dvec2 e2{0.0};
+          for (const auto& piece : sc.pieces) {
+            if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
+            double d2c;
+            const glm::dvec2 c = closestInConvex(sc.clip, {pr.eye.x, pr.eye.z}, d2c);
+            if (d2c < best) {
+              best = d2c;
+              e2 = pullTowards(c, piece.centroid, 0.0, region_inset);
+            }
+          }
+          if (best < std::numeric_limits<double>::infinity()) {
+            const glm::dvec3 e3 = eyeAt(e2);
+            if (glm::length(e3 - pr.eye) > end_gap) push(e3, pr.target, pr.depth + 1, pr.key + 1);
+          }
+        }
+      }
+    }
+  }
+  return false;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,201 @@
+// Walkthrough frames: the offscreen drawer's readback is not blank, the four order modes draw the
+// same ids image on gen:office's height plane (painter's against a 24-bit z-buffer), `walkvis
+// render` writes N PNGs and a CSV, and a bad path file is named with exit status 2.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include <sys/wait.h>
+
+#include "walkthrough/camera_path.h"
+#include "walkthrough/frame.h"
+#include "walkthrough/osmesa_context.h"
+#include "walkthrough/scene_drawer.h"
+
+namespace walkvis {
+namespace {
+
+constexpr int kW = 160, kH = 120;
+
+struct Offscreen {
+  OsMesaContext context;
+  SceneDrawer drawer;
+};
+
+Offscreen makeOffscreen() {
+  std::string why;
+  auto context = OsMesaContext::create(kW, kH, 24, &why);
+  if (!context) throw std::runtime_error("no OSMesa context: " + why);
+  auto drawer = SceneDrawer::create(OsMesaContext::loader(), &why);
+  if (!drawer) throw std::runtime_error("no drawer: " + why);
+  return {std::move(*context), std::move(*drawer)};
+}
+
+const World& office() {
+  static const World world = [] {
+    WorldOptions options;
+    options.build_pfd = true;
+    options.cull = ListCullMethod::kRegion;
+    return openWorld("gen:office", options);
+  }();
+  return world;
+}
+
+// Random eyes on the lowest level's height plane inside its walkable region, random yaw.
+std::vector<FreeCamera> officeCameras(const World& world, int count, uint64_t seed) {
+  std::vector<FreeCamera> cameras;
+  const PfdLevel& level = world.trees.levels.at(0);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> yaw(-3.14159, 3.14159);
+  uint64_t state = seed;
+  for (int k = 0; k < count; ++k) {
+    const PfdTree& tree = level.cells[k % level.cells.size()];
+    const glm::dvec2 p = samplePfdRegion(tree, state);
+    FreeCamera c;
+    c.eye = {p.x, level.height, p.y};
+    c.yaw = yaw(rng);
+    c.width = kW;
+    c.height = kH;
+    cameras.push_back(c);
+  }
+  return cameras;
+}
+
+TEST(SceneDrawer, ReadbackIsNotBlank) {
+  Offscreen o = makeOffscreen();
+  const World& world = office();
+  o.drawer.upload(world.trees.bsp, world.scene);
+  FrameBuilder builder;
+  std::vector<uint32_t> draw;
+  FreeCamera camera = officeCameras(world, 1, 3)[0];
+  builder.build(world, camera, OrderMode::kBsp, draw);
+  ASSERT_FALSE(draw.empty());
+  DrawSettings settings;
+  o.drawer.draw(camera, draw, settings);
+  std::vector<uint8_t> rgb;
+  o.drawer.readRgb(kW, kH, rgb);
+  ASSERT_EQ(rgb.size(), size_t(kW) * kH * 3);
+  std::set<uint32_t> colours;
+  for (size_t p = 0; p < rgb.size(); p += 3) colours.insert(uint32_t(rgb[p]) << 16 | uint32_t(rgb[p + 1]) << 8 | rgb[p + 2]);
+  EXPECT_GT(colours.size(), 3u) << "a shaded office view shows several colours";
+  // Nothing drawn: every id is kNoFragment.
+  settings.style = DrawStyle::kIds;
+  o.drawer.draw(camera, {}, settings);
+  std::vector<uint32_t> ids;
+  o.drawer.readIds(kW, kH, ids);
+  EXPECT_EQ(std::count(ids.begin(), ids.end(), kNoFragment), kW * kH);
+}
+
+TEST(FrameBuilder, FourModesDrawTheSameIdsImage) {
+  Offscreen o = makeOffscreen();
+  const World& world = office();
+  ASSERT_FALSE(world.trees.levels.empty());
+  o.drawer.upload(world.trees.bsp, world.scene);
+  FrameBuilder builder;
+  std::vector<uint32_t> draw, truth, ids;
+  uint64_t differing = 0, pixels = 0, tree_frames = 0;
+  for (const FreeCamera& camera : officeCameras(world, 12, 7)) {
+    DrawSettings z;
+    z.style = DrawStyle::kIds;
+    z.depth_test = true;
+    z.cull_back_faces = true;
+    const FrameStats zs = builder.build(world, camera, OrderMode::kZBuffer, draw);
+    EXPECT_EQ(zs.listed, world.trees.bsp.fragments.size());
+    o.drawer.draw(camera, draw, z);
+    o.drawer.readIds(kW, kH, truth);
+    EXPECT_LT(std::count(truth.begin(), truth.end(), kNoFragment), kW * kH) << "inside the office something shows";
+    for (OrderMode mode : {OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd}) {
+      const FrameStats s = builder.build(world, camera, mode, draw);
+      EXPECT_EQ(s.drawn, draw.size());
+      EXPECT_EQ(s.listed, s.drawn + s.culled);
+      if (mode != OrderMode::kBsp) {
+        EXPECT_EQ(s.used, mode) << "the eye is on the height plane inside the region";
+        EXPECT_EQ(s.level, 0);
+        tree_frames += s.used == mode;
+      }
+      DrawSettings p;
+      p.style = DrawStyle::kIds;
+      o.drawer.draw(camera, draw, p);
+      o.drawer.readIds(kW, kH, ids);
+      for (size_t k = 0; k < ids.size(); ++k) differing += ids[k] != truth[k];
+      pixels += ids.size();
+    }
+  }
+  EXPECT_EQ(tree_frames, 24u);
+  // Same triangles, same float positions: only z-buffer depth ties (coplanar surfaces at 24 bits)
+  // may differ. Tolerance: 0.1% of the pixels compared.
+  EXPECT_LE(differing, pixels / 1000) << differing << " of " << pixels << " pixels differ";
+}
+
+TEST(FrameBuilder, WrongOrderIsCaught) {
+  // The check above can fail: drawing the BSP order reversed (front to back) differs a lot.
+  Offscreen o = makeOffscreen();
+  const World& world = office();
+  o.drawer.upload(world.trees.bsp, world.scene);
+  FrameBuilder builder;
+  std::vector<uint32_t> draw, truth, ids;
+  const FreeCamera camera = officeCameras(world, 1, 11)[0];
+  builder.build(world, camera, OrderMode::kZBuffer, draw);
+  DrawSettings z;
+  z.style = DrawStyle::kIds;
+  z.depth_test = z.cull_back_faces = true;
+  o.drawer.draw(camera, draw, z);
+  o.drawer.readIds(kW, kH, truth);
+  builder.build(world, camera, OrderMode::kBsp, draw);
+  std::reverse(draw.begin(), draw.end());
+  DrawSettings p;
+  p.style = DrawStyle::kIds;
+  o.drawer.draw(camera, draw, p);
+  o.drawer.readIds(kW, kH, ids);
+  size_t differing = 0;
+  for (size_t k = 0; k < ids.size(); ++k) differing += ids[k] != truth[k];
+  EXPECT_GT(differing, ids.size() / 100);
+}
+
+int run(const std::string& args) { return std::system((std::string(WALKVIS_BINARY) + " " + args).c_str()); }
+
+TEST(RenderCommand, WritesFramesAndCsv) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "walkvis_test_render";
+  std::filesystem::remove_all(dir);
+  const int status = run("render gen:office --frames 5 --size 64x48 --mode pfd --out " + dir.string() +
+                         " > /dev/null 2>&1");
+  ASSERT_EQ(status, 0);
+  for (int k = 0; k < 5; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", k);
+    EXPECT_TRUE(std::filesystem::exists(dir / name)) << name;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "frame_00005.png"));
+  std::ifstream csv(dir / "frames.csv");
+  std::string line;
+  int lines = 0;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("frame,time,x,y,z,yaw,pitch,frame_ms", 0), 0u) << line;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 5);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RenderCommand, BadPathFileIsNamed) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "walkvis_test_render_bad";
+  const std::filesystem::path bad = std::filesystem::temp_directory_path() / "walkvis_bad_path.csv";
+  { std::ofstream(bad) << "time,x,y,z,yaw,pitch\n0,1,2,oops,0,0\n"; }
+  const std::filesystem::path err = std::filesystem::temp_directory_path() / "walkvis_bad_path.err";
+  const int status = run("render gen:office --path " + bad.string() + " --out " + dir.string() + " 2> " + err.string());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  std::ifstream in(err);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find(bad.string()), std::string::npos) << text;
+  std::filesystem::remove(bad);
+  std::filesystem::remove(err);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace walkvis

@@ -1,0 +1,356 @@
+// Backface culling inside priority lists (backface/list_cull.h): for every method, cullRange keeps
+// each range's order, returns the number it dropped, and never drops a front-facing polygon, over
+// 10,000 random perspective eyes per mesh; ranges cut from random orders of meshes, from the BSP's
+// back-to-front order (the BSP path, eyes anywhere) and from a PFD tree's runs built with
+// drop_back_faces = false (eyes on its height plane, the runs its query yields).
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "backface/list_cull.h"
+#include "backface_test_util.h"
+#include "bsp/bsp.h"
+#include "pfd_hfd/pfd.h"
+#include "scenes/scene.h"
+
+namespace walkvis {
+namespace {
+
+using backface_test::Frame;
+using backface_test::frameOf;
+using backface_test::randomEye;
+using backface_test::randomSoup;
+using backface_test::randomUnit;
+
+constexpr int kEyes = 10000;
+
+struct CullSetup {
+  std::string label;
+  ListCullMethod method;
+  BackfaceOptions options;
+};
+
+std::vector<CullSetup> cullSetups() {
+  std::vector<CullSetup> out;
+  for (ListCullMethod m : {ListCullMethod::kNone, ListCullMethod::kPolygon, ListCullMethod::kMask,
+                           ListCullMethod::kCluster, ListCullMethod::kHierarchy, ListCullMethod::kRegion}) {
+    out.push_back({std::string(listCullMethodName(m)), m, {}});
+  }
+  BackfaceOptions tables;
+  tables.mask_list_min_chunk = 1;  // a table for every chunk, however small
+  out.push_back({"mask/tables", ListCullMethod::kMask, tables});
+  BackfaceOptions chunks;
+  chunks.mask_group_size = 16;
+  chunks.mask_resolution = 8;
+  chunks.mask_list_min_chunk = 1;
+  out.push_back({"mask/chunks16/N8", ListCullMethod::kMask, chunks});
+  BackfaceOptions mixed;
+  mixed.mask_group_size = 40;
+  mixed.mask_list_min_chunk = 25;  // tables for full chunks, the plane test for most range tails
+  out.push_back({"mask/chunks40/min25", ListCullMethod::kMask, mixed});
+  BackfaceOptions flat;
+  flat.cluster_hierarchy = false;
+  flat.cluster_tr = 4.0;
+  out.push_back({"cluster/flat/TR4", ListCullMethod::kCluster, flat});
+  return out;
+}
+
+struct Counts {
+  uint64_t false_culls = 0, culled = 0, back = 0, listed = 0;
+};
+
+// Checks `out` (after its first `base` entries) against the range: an in-order subsequence whose
+// dropped entries are all back-facing; polygon and region drop exactly the back faces, none
+// drops nothing; `culled` = the number dropped.
+void verify(const BackfaceInput& input, std::span<const uint32_t> range, const std::vector<uint32_t>& out, size_t base,
+            uint32_t culled, const CullSetup& setup, const glm::dvec3& eye, Counts& counts) {
+  ASSERT_EQ(out.size() - base + culled, range.size()) << setup.label;
+  size_t k = base;
+  uint64_t back = 0;
+  for (uint32_t p : range) {
+    const bool front = isFrontFacing(input.polygons[p].plane, eye);
+    back += !front;
+    if (k < out.size() && out[k] == p) {
+      ++k;
+    } else {
+      counts.false_culls += front;
+      ++counts.culled;
+    }
+  }
+  ASSERT_EQ(k, out.size()) << setup.label << ": the survivors are not an in-order subsequence of the range";
+  counts.back += back;
+  counts.listed += range.size();
+  if (setup.method == ListCullMethod::kNone) {
+    EXPECT_EQ(culled, 0u);
+  }
+  if (setup.method == ListCullMethod::kPolygon || setup.method == ListCullMethod::kRegion) {
+    EXPECT_EQ(culled, back);
+  }
+}
+
+// Random order of the polygons (some repeated), cut into ranges of 0..3·mean polygons, plus the
+// whole array and one range overlapping two others. Per eye a few random ranges are culled.
+void expectNoFrontFaceCulled(const Scene& s, uint64_t seed, uint32_t mean) {
+  const BackfaceInput input = backfaceInput(s);
+  std::mt19937_64 rng(seed);
+  std::vector<uint32_t> indices(s.polygons.size());
+  for (uint32_t i = 0; i < indices.size(); ++i) indices[i] = i;
+  std::shuffle(indices.begin(), indices.end(), rng);
+  for (uint32_t i = 0; i < indices.size() / 10; ++i) indices.push_back(indices[rng() % s.polygons.size()]);
+  std::vector<IndexRange> ranges;
+  for (uint32_t at = 0; at < indices.size();) {
+    const uint32_t count = std::min<uint32_t>(static_cast<uint32_t>(rng() % (3 * mean + 1)), static_cast<uint32_t>(indices.size()) - at);
+    ranges.push_back({at, count});
+    at += count;
+  }
+  ranges.push_back({0, static_cast<uint32_t>(indices.size())});
+  ranges.push_back({static_cast<uint32_t>(indices.size() / 3), static_cast<uint32_t>(indices.size() / 3)});
+  const Frame f = frameOf(s);
+  for (const CullSetup& setup : cullSetups()) {
+    SCOPED_TRACE(s.name + " " + setup.label);
+    // Eyes around a mesh, not inside a building: tell cluster where most of them are (its default
+    // box of the mesh itself would let it merge an inward dome into clusters no eye culls).
+    BackfaceOptions options = setup.options;
+    options.cluster_eye_lo = f.center - glm::dvec3(3.0 * f.radius);
+    options.cluster_eye_hi = f.center + glm::dvec3(3.0 * f.radius);
+    const ListCuller culler = ListCuller::build(input, indices, ranges, setup.method, options);
+    ASSERT_EQ(culler.rangeCount(), ranges.size());
+    std::mt19937_64 eye_rng(seed + 1);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<uint32_t> out;
+    out.reserve(indices.size() + 1);
+    Counts counts;
+    for (int e = 0; e < kEyes; ++e) {
+      BackfaceView view;
+      view.eye = randomEye(s, eye_rng, f);
+      view.view_dir = randomUnit(eye_rng);
+      view.fov = (20.0 + 130.0 * u(eye_rng)) * M_PI / 180.0;
+      for (int k = 0; k < 3; ++k) {
+        // Every 100th eye the whole array, otherwise random ranges.
+        const uint32_t r = k == 0 && e % 100 == 0 ? static_cast<uint32_t>(ranges.size() - 2)
+                                                  : static_cast<uint32_t>(eye_rng() % ranges.size());
+        out.assign(1, 0xDEADBEEFu);  // cullRange appends: what is there stays
+        const uint32_t culled = culler.cullRange(r, view, out);
+        ASSERT_EQ(out[0], 0xDEADBEEFu);
+        verify(input, std::span<const uint32_t>(indices).subspan(ranges[r].first, ranges[r].count), out, 1, culled,
+               setup, view.eye, counts);
+      }
+    }
+    EXPECT_EQ(counts.false_culls, 0u);
+    if (setup.method != ListCullMethod::kNone) {
+      EXPECT_GT(counts.culled, 0u);
+    }
+    testing::Test::RecordProperty(setup.label + "_effectiveness",
+                   std::to_string(static_cast<double>(counts.culled) / static_cast<double>(std::max<uint64_t>(counts.back, 1))));
+  }
+}
+
+TEST(ListCull, SphereNoFrontFaceCulled) { expectNoFrontFaceCulled(loadScene("gen:sphere?tris=1200"), 41, 60); }
+TEST(ListCull, DomeNoFrontFaceCulled) { expectNoFrontFaceCulled(loadScene("gen:dome?tris=800"), 42, 40); }
+TEST(ListCull, InwardDomeNoFrontFaceCulled) { expectNoFrontFaceCulled(loadScene("gen:dome?inside=1&tris=600"), 43, 30); }
+TEST(ListCull, SoupNoFrontFaceCulled) { expectNoFrontFaceCulled(randomSoup(44, 300), 44, 20); }
+TEST(ListCull, FarFromOriginNoFrontFaceCulled) { expectNoFrontFaceCulled(backface_test::farFromOriginSphere(), 45, 30); }
+
+// A building: a floor, walls of both facings (some sharing planes), a ramp, boxes.
+Scene building(uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> coord(0.0, 20.0);
+  std::uniform_int_distribution<int> grid(0, 20);
+  Scene scene;
+  scene.name = "building-" + std::to_string(seed);
+  scene.eye_height = 1.5;
+  auto quad = [&](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, glm::dvec3 d) {
+    const glm::dvec3 v[4] = {a, b, c, d};
+    addFace(scene, v, 0x808080, scene.name);
+  };
+  quad({0, 0, 0}, {0, 0, 20}, {20, 0, 20}, {20, 0, 0});
+  for (int i = 0; i < 24; ++i) {
+    glm::dvec2 p, q;
+    if (i % 2 == 0) {
+      p = {grid(rng), grid(rng)};
+      q = (rng() & 1) ? glm::dvec2{p.x, static_cast<double>(grid(rng))} : glm::dvec2{static_cast<double>(grid(rng)), p.y};
+    } else {
+      p = {coord(rng), coord(rng)};
+      q = {coord(rng), coord(rng)};
+    }
+    if (p == q) continue;
+    const double top = 2.0 + static_cast<double>(rng() % 3);
+    quad({p.x, 0, p.y}, {q.x, 0, q.y}, {q.x, top, q.y}, {p.x, top, p.y});
+    if (i % 3 == 0) quad({p.x, top, p.y}, {q.x, top, q.y}, {q.x, 0, q.y}, {p.x, 0, p.y});  // the other side too
+  }
+  quad({2, 0, 2}, {2, 0, 5}, {6, 1.5, 5}, {6, 1.5, 2});
+  FloorLevel level;
+  level.walkable = {{{0, 0}, {20, 0}, {20, 20}, {0, 20}}};
+  level.walkable_area = 400.0;
+  scene.levels.push_back(level);
+  return scene;
+}
+
+// The BSP path: the back-to-front order of all fragments cut into ranges; eyes anywhere (off the
+// height plane, inside and outside the building).
+TEST(ListCull, BspOrderRangesNoFrontFaceCulled) {
+  const Scene scene = building(51);
+  const BspTree bsp = buildBsp(scene);
+  const BackfaceInput input{bsp.vertices, bsp.fragments};
+  std::vector<uint32_t> order;
+  backToFront(bsp, glm::dvec3(10.0, 1.5, 10.0), order, false);
+  ASSERT_EQ(order.size(), bsp.fragments.size());
+  std::vector<IndexRange> ranges;
+  for (uint32_t at = 0; at < order.size(); at += 7) ranges.push_back({at, std::min<uint32_t>(7, static_cast<uint32_t>(order.size()) - at)});
+  ranges.push_back({0, static_cast<uint32_t>(order.size())});
+  std::mt19937_64 rng(52);
+  std::uniform_real_distribution<double> u(-5.0, 25.0);
+  for (const CullSetup& setup : cullSetups()) {
+    SCOPED_TRACE(setup.label);
+    const ListCuller culler = ListCuller::build(input, order, ranges, setup.method, setup.options);
+    std::vector<uint32_t> out;
+    out.reserve(order.size());
+    Counts counts;
+    for (int e = 0; e < kEyes; ++e) {
+      BackfaceView view;
+      view.eye = glm::dvec3(u(rng), 0.3 * u(rng), u(rng));
+      const uint32_t r = e % 50 == 0 ? static_cast<uint32_t>(ranges.size() - 1) : static_cast<uint32_t>(rng() % (ranges.size() - 1));
+      out.clear();
+      const uint32_t culled = culler.cullRange(r, view, out);
+      verify(input, std::span<const uint32_t>(order).subspan(ranges[r].first, ranges[r].count), out, 0, culled, setup,
+             view.eye, counts);
+    }
+    EXPECT_EQ(counts.false_culls, 0u);
+    if (setup.method != ListCullMethod::kNone) {
+      EXPECT_GT(counts.culled, 0u);
+    }
+  }
+}
+
+// The PFD path: a tree built with drop_back_faces = false; its runs are the ranges; eyes on the
+// height plane; per eye the runs pfdQueryRuns yields are culled in order.
+TEST(ListCull, PfdRunsNoFrontFaceCulled) {
+  const Scene scene = building(61);
+  const BspTree bsp = buildBsp(scene);
+  PfdOptions options;
+  options.drop_back_faces = false;
+  options.stat_eyes = 0;
+  const FloorLevel& level = scene.levels[0];
+  const double height = level.floor_y + scene.eye_height;
+  const PfdTree tree = buildPfd(bsp, level.walkable, height, std::nullopt, options);
+  ASSERT_FALSE(tree.runs.empty());
+  std::vector<IndexRange> ranges;
+  std::map<std::pair<uint32_t, uint32_t>, uint32_t> run_index;
+  for (const PfdRun& run : tree.runs) {
+    run_index.emplace(std::make_pair(run.first, run.count), static_cast<uint32_t>(ranges.size()));
+    ranges.push_back({run.first, run.count});
+  }
+  const BackfaceInput input{bsp.vertices, bsp.fragments};
+  uint64_t listed_back = 0;
+  for (const CullSetup& setup : cullSetups()) {
+    SCOPED_TRACE(setup.label);
+    const ListCuller culler = ListCuller::build(input, tree.fragment_ids, ranges, setup.method, setup.options);
+    uint64_t rng_state = 62;
+    std::vector<PfdRun> runs;
+    std::vector<uint32_t> out;
+    out.reserve(tree.fragment_ids.size());
+    Counts counts;
+    for (int e = 0; e < kEyes; ++e) {
+      const glm::dvec2 p = samplePfdRegion(tree, rng_state);
+      BackfaceView view;
+      view.eye = glm::dvec3(p.x, height, p.y);
+      pfdQueryRuns(tree, view.eye, runs);
+      for (const PfdRun& run : runs) {
+        const auto it = run_index.find({run.first, run.count});
+        ASSERT_NE(it, run_index.end());
+        const size_t base = out.size();
+        const uint32_t culled = culler.cullRange(it->second, view, out);
+        verify(input, std::span<const uint32_t>(tree.fragment_ids).subspan(run.first, run.count), out, base, culled,
+               setup, view.eye, counts);
+      }
+      out.clear();
+    }
+    EXPECT_EQ(counts.false_culls, 0u);
+    listed_back = counts.back;
+  }
+  // With drop_back_faces = false the lists hold back faces for the run-time methods to cull.
+  RecordProperty("listed_back_faces", std::to_string(listed_back));
+  // Until PfdOptions::drop_back_faces = false is implemented the lists hold front faces only and
+  // the culling above had nothing to cull: say so rather than pass silently.
+  if (listed_back == 0) GTEST_SKIP() << "PfdOptions::drop_back_faces = false lists no back face (not implemented yet?)";
+}
+
+// gen:office in z-buffer mode (one range of all fragments, eyes inside at eye height): clustered
+// by the probability over the scene's box, the clustered test culls a real share of what the plane
+// test culls (with the paper's box around each cluster it culled nothing: one cluster per wall
+// orientation); the mask of one group culls nothing (the eye is inside its sphere: inherent).
+TEST(ListCull, OfficeEyesInsideClusterCulls) {
+  const Scene scene = loadScene("gen:office");
+  const BspTree bsp = buildBsp(scene);
+  const BackfaceInput input{bsp.vertices, bsp.fragments};
+  std::vector<uint32_t> all(bsp.fragments.size());
+  for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  const IndexRange range{0, static_cast<uint32_t>(all.size())};
+  const Bounds b = sceneBounds(scene);
+  const double height = scene.levels.at(0).floor_y + scene.eye_height;
+  std::mt19937_64 rng(81);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<glm::dvec3> eyes;
+  for (int e = 0; e < 200; ++e) {
+    eyes.emplace_back(b.lo.x + u(rng) * (b.hi.x - b.lo.x), height, b.lo.z + u(rng) * (b.hi.z - b.lo.z));
+  }
+  auto culledPerEye = [&](ListCullMethod method, const BackfaceOptions& options) {
+    const ListCuller culler = ListCuller::build(input, all, std::span<const IndexRange>(&range, 1), method, options);
+    std::vector<uint32_t> out;
+    Counts counts;
+    const CullSetup setup{"office", method, options};
+    for (const glm::dvec3& eye : eyes) {
+      out.clear();
+      BackfaceView view;
+      view.eye = eye;
+      const uint32_t culled = culler.cullRange(0, view, out);
+      verify(input, all, out, 0, culled, setup, eye, counts);
+    }
+    EXPECT_EQ(counts.false_culls, 0u);
+    return static_cast<double>(counts.culled) / static_cast<double>(eyes.size());
+  };
+  const double plane = culledPerEye(ListCullMethod::kPolygon, {});
+  const double cluster = culledPerEye(ListCullMethod::kCluster, {});
+  RecordProperty("polygon_culled_per_eye", std::to_string(plane));
+  RecordProperty("cluster_culled_per_eye", std::to_string(cluster));
+  EXPECT_GT(plane, 100.0);
+  EXPECT_GT(cluster, 0.25 * plane);
+  EXPECT_EQ(culledPerEye(ListCullMethod::kMask, {}), 0.0);
+}
+
+TEST(ListCull, BadInput) {
+  const Scene s = loadScene("gen:sphere?tris=80");
+  const BackfaceInput input = backfaceInput(s);
+  const std::vector<uint32_t> indices{0, 1, 2};
+  const std::vector<IndexRange> ok{{0, 3}, {3, 0}};
+  const std::vector<IndexRange> outside{{2, 2}};
+  EXPECT_THROW(ListCuller::build(input, indices, outside, ListCullMethod::kPolygon), SceneError);
+  const std::vector<uint32_t> bad_index{0, static_cast<uint32_t>(s.polygons.size())};
+  EXPECT_THROW(ListCuller::build(input, bad_index, ok, ListCullMethod::kPolygon), SceneError);
+  BackfaceOptions view_cone;
+  view_cone.mask_use_view_cone = true;
+  EXPECT_THROW(ListCuller::build(input, indices, ok, ListCullMethod::kMask, view_cone), SceneError);
+  BackfaceOptions bad_n;
+  bad_n.mask_resolution = 19;
+  EXPECT_THROW(ListCuller::build(input, indices, ok, ListCullMethod::kMask, bad_n), SceneError);
+  EXPECT_THROW(parseListCullMethod("cone"), SceneError);
+  EXPECT_EQ(parseListCullMethod("region"), ListCullMethod::kRegion);
+  for (const CullSetup& setup : cullSetups()) {
+    const ListCuller culler = ListCuller::build(input, indices, ok, setup.method, setup.options);
+    std::vector<uint32_t> out;
+    EXPECT_EQ(culler.cullRange(1, BackfaceView{}, out), 0u);
+    EXPECT_TRUE(out.empty());
+    EXPECT_THROW(culler.cullRange(2, BackfaceView{}, out), SceneError);
+    const ListCuller empty = ListCuller::build(input, {}, {}, setup.method, setup.options);
+    EXPECT_EQ(empty.rangeCount(), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace walkvis

@@ -1,0 +1,175 @@
+// The PFD order property on real scenes (DESIGN.md "PFD tree", correctness): for random eyes on
+// every level's height plane, the order of the view cell under the eye (findPfdCell, pfdQuery)
+// is exactly the sequence backToFront(bsp, eye, order, true) gives: the build is a partial
+// evaluation of that traversal, so not only the set of fragments but their order, even within
+// one BSP node, must be the same. pfdQueryRuns and pfdQueryCoherent (along a path of small moves
+// and jumps) must give the same sequence. The same check runs at 10,000 eyes per level through
+// `walkvis validate FILE --order pfd --compare-bsp 10000`.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "bsp/bsp.h"
+#include "pfd_hfd/pfd.h"
+#include "scenes/scene.h"
+
+namespace walkvis {
+namespace {
+
+struct PropertyResult {
+  uint64_t compared = 0, on_line = 0, mismatches = 0, no_cell = 0;
+  uint64_t differs_with_back_faces = 0;  // control: the order with back faces kept is a different sequence
+  double tests = 0.0;
+};
+
+// Area-weighted cell, then a uniform point of its region.
+glm::dvec3 sampleLevel(const PfdLevel& level, uint64_t& state) {
+  double total = 0.0;
+  for (const PfdTree& t : level.cells) total += t.region.empty() ? 0.0 : t.stats.region_area;
+  state = state * 6364136223846793005ull + 1442695040888963407ull;
+  double pick = static_cast<double>(state >> 11) * 0x1.0p-53 * total;
+  size_t c = 0, last = 0;
+  for (; c < level.cells.size(); ++c) {
+    const double a = level.cells[c].region.empty() ? 0.0 : level.cells[c].stats.region_area;
+    if (!(a > 0.0)) continue;
+    last = c;
+    if (pick < a) break;
+    pick -= a;
+  }
+  if (c == level.cells.size()) c = last;
+  const glm::dvec2 p = samplePfdRegion(level.cells[c], state);
+  return {p.x, level.height, p.y};
+}
+
+// Strictly inside one of the tree's convex region pieces (either winding), in doubles: a step
+// between two eyes of a non-convex walkable region may leave it (into a wall), where the tree's
+// order is not defined.
+bool insideRegion(const PfdTree& tree, const glm::dvec3& eye) {
+  for (const auto& ring : tree.region) {
+    size_t pos = 0, neg = 0;
+    for (size_t i = 0; i < ring.size(); ++i) {
+      const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
+      const double c = (b.x - a.x) * (eye.z - a.y) - (b.y - a.y) * (eye.x - a.x);
+      pos += c > 0;
+      neg += c < 0;
+    }
+    if (pos == ring.size() || neg == ring.size()) return true;
+  }
+  return false;
+}
+
+PropertyResult checkLevel(const BspTree& bsp, const PfdLevel& level, uint32_t eyes, uint64_t seed) {
+  PropertyResult r;
+  if (level.cells.empty()) return r;
+  uint64_t state = seed;
+  std::vector<uint32_t> pfd, coherent, ref, with_back, from_runs;
+  std::vector<PfdRun> runs;
+  PfdCursor cursor;
+  const PfdTree* cursor_tree = nullptr;
+  glm::dvec3 prev = sampleLevel(level, state);
+  for (uint32_t e = 0; e < eyes; ++e) {
+    glm::dvec3 eye = sampleLevel(level, state);
+    // Every other eye is a small step from the last one (when it stays in the same cell), so the
+    // coherent query re-walks only part of its path.
+    if (e % 2 == 1) {
+      const glm::dvec3 step = prev + 0.01 * (eye - prev);
+      const PfdTree* a = findPfdCell(level, prev);
+      if (a && a == findPfdCell(level, step) && insideRegion(*a, step)) eye = step;
+    }
+    prev = eye;
+    const PfdTree* tree = findPfdCell(level, eye);
+    if (!tree) {
+      ++r.no_cell;
+      continue;
+    }
+    if (tree != cursor_tree) {
+      cursor = PfdCursor{};
+      cursor_tree = tree;
+    }
+    const PfdQueryResult q = pfdQuery(*tree, eye, pfd);
+    const PfdQueryResult qc = pfdQueryCoherent(*tree, eye, cursor, coherent);
+    pfdQueryRuns(*tree, eye, runs);
+    if (q.on_line || qc.on_line) {
+      ++r.on_line;
+      continue;
+    }
+    ++r.compared;
+    r.tests += q.tests;
+    from_runs.clear();
+    for (const PfdRun& run : runs)
+      from_runs.insert(from_runs.end(), tree->fragment_ids.begin() + run.first,
+                       tree->fragment_ids.begin() + run.first + run.count);
+    backToFront(bsp, eye, ref, true);
+    backToFront(bsp, eye, with_back, false);
+    if (with_back != pfd) ++r.differs_with_back_faces;
+    if (pfd != ref || coherent != ref || from_runs != ref) {
+      if (r.mismatches < 3) {
+        size_t first = 0;
+        while (first < pfd.size() && first < ref.size() && pfd[first] == ref[first]) ++first;
+        ADD_FAILURE() << "level " << level.level << " eye (" << eye.x << ", " << eye.y << ", " << eye.z << "): pfd "
+                      << pfd.size() << " ids, coherent " << (coherent == ref ? "ok" : "differs") << ", runs "
+                      << (from_runs == ref ? "ok" : "differ") << ", bsp " << ref.size()
+                      << " ids, first difference at " << first;
+      }
+      ++r.mismatches;
+    }
+  }
+  return r;
+}
+
+// Every level of the scene, view cells as `walkvis build` makes them (but a smaller per-cell
+// budget, so that large levels are cut into cells and findPfdCell is exercised), `eyes` eyes
+// spread over the levels (at least `min_per_level` each).
+void checkScene(const std::string& spec, uint32_t eyes, uint32_t min_per_level, uint64_t cell_memory) {
+  Scene scene;
+  try {
+    scene = loadScene(spec);
+  } catch (const SceneError& e) {
+    GTEST_SKIP() << spec << ": " << e.what();  // freedoom2.wad not installed
+  }
+  ASSERT_FALSE(scene.levels.empty()) << spec;
+  const BspTree bsp = buildBsp(scene);
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 0;
+  options.cell_memory = cell_memory;
+  options.max_memory = 512ull << 20;
+  uint64_t used = 0;
+  const uint32_t per_level =
+      std::max<uint32_t>(min_per_level, eyes / static_cast<uint32_t>(scene.levels.size()));
+  PropertyResult total;
+  uint64_t cells = 0;
+  for (size_t l = 0; l < scene.levels.size(); ++l) {
+    const PfdLevel level = buildPfdLevel(bsp, scene.levels[l], static_cast<uint32_t>(l), scene.eye_height, options, used);
+    cells += level.cells.size();
+    SCOPED_TRACE(spec + " level " + std::to_string(l));
+    const PropertyResult r = checkLevel(bsp, level, per_level, 1000 + l);
+    EXPECT_EQ(r.mismatches, 0u);
+    EXPECT_EQ(r.no_cell, 0u);
+    // Random double eyes essentially never lie exactly on a test-line.
+    EXPECT_LE(r.on_line, per_level / 100 + 1);
+    total.compared += r.compared;
+    total.mismatches += r.mismatches;
+    total.differs_with_back_faces += r.differs_with_back_faces;
+    total.tests += r.tests;
+  }
+  EXPECT_GE(total.compared, static_cast<uint64_t>(0.99 * per_level * scene.levels.size()));
+  // Control: the comparison tells orders apart (the back-facing fragments change the sequence).
+  EXPECT_GT(total.differs_with_back_faces, total.compared / 2);
+  // A PFD query makes far fewer plane tests than the BSP traversal visits nodes.
+  EXPECT_LT(total.tests / std::max<double>(1.0, total.compared), 0.5 * static_cast<double>(bsp.nodes.size()));
+  ::testing::Test::RecordProperty("eyes_compared", std::to_string(total.compared));
+  ::testing::Test::RecordProperty("view_cells", std::to_string(cells));
+}
+
+TEST(PfdProperty, OfficeDefault) { checkScene("gen:office", 3000, 3000, 64ull << 20); }
+// Cut into view cells (the office's tree is about 7 MB): the cell lookup and the trees' seams.
+TEST(PfdProperty, OfficeInViewCells) { checkScene("gen:office", 2000, 2000, 2ull << 20); }
+TEST(PfdProperty, Office32Rooms) { checkScene("gen:office?rooms=32", 3000, 3000, 64ull << 20); }
+TEST(PfdProperty, FreedoomMap07) { checkScene("freedoom2.wad:MAP07", 3000, 200, 4ull << 20); }
+TEST(PfdProperty, FreedoomMap17) { checkScene("freedoom2.wad:MAP17", 3000, 100, 4ull << 20); }
+
+}  // namespace
+}  // namespace walkvis

@@ -1,0 +1,364 @@
+// walkvis bench hfd SCENE and walkvis bench rays SCENE (issue 5; DESIGN.md "Validation and
+// statistics", speed against error).
+//
+//   bench hfd SCENE [--region-samples LIST] [--polygon-samples LIST] [--refine-rays LIST]
+//                   [--views N] [--res PIXELS] [--max-levels K] [--max-seconds S] [--csv FILE] [--png FILE]
+//     Sweeps the HFD sampling knobs: per point the HFD trees of the scene's levels are built
+//     (buildPfdLevel with a VisibilityScene) and measured with computeHfdStats: build seconds, rays
+//     cast, ray rate, tree bytes, mean listed, pixel_error_ratio, missed fragments. Writes a CSV
+//     and a speed-against-error plot (PNG: build seconds across, log10 pixel error up, each point
+//     numbered by its CSV row).
+//   bench rays SCENE [--rays N]
+//     Occlusion-ray throughput of the same Embree scene (VisibilityScene::occluded): random
+//     incoherent segments from walkable points at eye height to points of random fragments, on 1
+//     and 2 threads. The build's rays / build seconds is given as a fraction of it.
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bsp/bsp.h"
+#include "commands.h"
+#include "pfd_hfd/pfd.h"
+#include "pfd_hfd/visibility.h"
+#include "walkthrough/hfd_stats.h"
+#include "walkthrough/validate.h"
+
+namespace walkvis {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+uint64_t splitmix(uint64_t& state) {
+  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+double uniform01(uint64_t& s) { return static_cast<double>(splitmix(s) >> 11) * 0x1.0p-53; }
+
+// ---- bench rays ----
+
+// A random point of a convex polygon (fan triangle by area, then barycentric).
+template <typename V>
+V pointIn(std::span<const V> poly, uint64_t& rng, double (*area)(const V&, const V&, const V&)) {
+  double total = 0.0;
+  for (size_t k = 1; k + 1 < poly.size(); ++k) total += area(poly[0], poly[k], poly[k + 1]);
+  double pick = uniform01(rng) * total;
+  size_t k = 1;
+  for (; k + 2 < poly.size(); ++k) {
+    const double a = area(poly[0], poly[k], poly[k + 1]);
+    if (pick <= a) break;
+    pick -= a;
+  }
+  double a = uniform01(rng), b = uniform01(rng);
+  if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+  return poly[0] + a * (poly[k] - poly[0]) + b * (poly[k + 1] - poly[0]);
+}
+double area2(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+  return std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+}
+double area3(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  const glm::dvec3 u = b - a, v = c - a;
+  return std::sqrt(std::pow(u.y * v.z - u.z * v.y, 2) + std::pow(u.z * v.x - u.x * v.z, 2) +
+                   std::pow(u.x * v.y - u.y * v.x, 2));
+}
+
+struct RayRate {
+  double rays_per_second_1 = 0.0;
+  double rays_per_second_2 = 0.0;
+  double occluded_fraction = 0.0;
+};
+
+RayRate measureRays(const Scene& scene, const BspTree& bsp, const VisibilityScene& vis, uint64_t count) {
+  // Eyes: a random level (by walkable area), a random piece by area, at eye height.
+  struct Piece {
+    std::span<const glm::dvec2> v;
+    double y, area;
+  };
+  std::vector<Piece> pieces;
+  double total = 0.0;
+  for (const FloorLevel& level : scene.levels)
+    for (const auto& p : level.walkable) {
+      if (p.size() < 3) continue;
+      double a = 0.0;
+      for (size_t k = 1; k + 1 < p.size(); ++k) a += area2(p[0], p[k], p[k + 1]);
+      if (!(a > 0.0)) continue;
+      pieces.push_back({p, level.floor_y + scene.eye_height, a});
+      total += a;
+    }
+  if (pieces.empty() || bsp.fragments.empty()) throw SceneError(scene.name + ": no walkable region or no polygons");
+  std::vector<std::pair<glm::dvec3, glm::dvec3>> rays(count);
+  uint64_t rng = 12345;
+  for (auto& r : rays) {
+    double pick = uniform01(rng) * total;
+    size_t i = 0;
+    while (i + 1 < pieces.size() && pick > pieces[i].area) pick -= pieces[i++].area;
+    const glm::dvec2 e = pointIn<glm::dvec2>(pieces[i].v, rng, area2);
+    const uint32_t f = static_cast<uint32_t>(splitmix(rng) % bsp.fragments.size());
+    const auto fv = bsp.fragmentVertices(f);
+    const glm::dvec3 p = fv.size() >= 3 ? pointIn<glm::dvec3>(fv, rng, area3) : fv[0];
+    r = {glm::dvec3(e.x, pieces[i].y, e.y), p};
+  }
+  RayRate out;
+  for (int threads : {1, 2}) {
+    std::vector<uint64_t> blocked(threads, 0);
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<std::thread> pool;
+    for (int t = 0; t < threads; ++t)
+      pool.emplace_back([&, t] {
+        for (size_t k = t; k < rays.size(); k += threads) blocked[t] += vis.occluded(rays[k].first, rays[k].second);
+      });
+    for (auto& th : pool) th.join();
+    const double s = secondsSince(t0);
+    uint64_t b = 0;
+    for (uint64_t x : blocked) b += x;
+    (threads == 1 ? out.rays_per_second_1 : out.rays_per_second_2) = static_cast<double>(count) / s;
+    out.occluded_fraction = static_cast<double>(b) / static_cast<double>(count);
+  }
+  return out;
+}
+
+struct RaysArgs {
+  SceneArgs scene;
+  uint64_t rays = 2000000;
+};
+
+int runRaysBench(const RaysArgs& args) {
+  const Scene scene = loadScene(args.scene.scene, args.scene.loadOptions());
+  const BspTree bsp = buildBsp(scene);
+  const VisibilityScene vis = VisibilityScene::build(bsp);
+  const RayRate r = measureRays(scene, bsp, vis, args.rays);
+  std::printf("%s: %zu fragments, %llu random eye-to-fragment segments (%.1f%% occluded)\n", scene.name.c_str(),
+              bsp.fragments.size(), static_cast<unsigned long long>(args.rays), 100.0 * r.occluded_fraction);
+  std::printf("occlusion rays/s: 1 thread %.3g, 2 threads %.3g (speed-up %.2f)\n", r.rays_per_second_1,
+              r.rays_per_second_2, r.rays_per_second_2 / r.rays_per_second_1);
+  return 0;
+}
+
+// ---- bench hfd ----
+
+struct HfdBenchArgs {
+  SceneArgs scene;
+  std::vector<uint32_t> region_samples{16, 32, 64};
+  std::vector<uint32_t> polygon_samples{4, 8, 16};
+  std::vector<uint32_t> refine_rays{0, 1024};
+  uint32_t views = 50;
+  int res = 64;
+  uint32_t max_levels = 0;  // 0: all
+  double max_seconds = 600.0;
+  uint64_t ray_rate_rays = 500000;
+  std::string csv = "bench_hfd.csv";
+  std::string png = "bench_hfd.png";
+};
+
+struct HfdPoint {
+  VisibilityOptions vis;
+  double build_seconds = 0.0;
+  uint64_t rays = 0, tests = 0, rejected = 0, bytes = 0;
+  HfdSummary stats;
+};
+
+// 5 x 7 bitmap glyphs for the plot's labels: digits, '.', '-', 'e', 's'.
+const char* glyph(char c) {
+  static const char* digits[10] = {
+      "01110100011001110101110011000101110", "00100011000010000100001000010001110",
+      "01110100010000100010001000100011111", "11111000100010000010000011000101110",
+      "00010001100101010010111110001000010", "11111100001111000001000011000101110",
+      "00110010001000011110100011000101110", "11111000010001000100010000100001000",
+      "01110100011000101110100011000101110", "01110100011000101111000010001001100"};
+  if (c >= '0' && c <= '9') return digits[c - '0'];
+  switch (c) {
+    case '.': return "00000000000000000000000000110001100";
+    case '-': return "00000000000000011111000000000000000";
+    case 'e': return "00000000000111010001111111000001110";
+    case 's': return "00000000000111110000011100000111110";
+    default: return "00000000000000000000000000000000000";
+  }
+}
+
+struct Canvas {
+  int w, h;
+  std::vector<uint8_t> rgb;
+  Canvas(int width, int height) : w(width), h(height), rgb(static_cast<size_t>(width) * height * 3, 255) {}
+  void set(int x, int y, std::array<uint8_t, 3> c) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return;
+    std::copy(c.begin(), c.end(), rgb.begin() + (static_cast<size_t>(y) * w + x) * 3);
+  }
+  void text(int x, int y, const std::string& s, std::array<uint8_t, 3> c = {0, 0, 0}) {
+    for (char ch : s) {
+      const char* g = glyph(ch);
+      for (int r = 0; r < 7; ++r)
+        for (int k = 0; k < 5; ++k)
+          if (g[r * 5 + k] == '1') set(x + k, y + r, c);
+      x += 6;
+    }
+  }
+};
+
+void drawPlot(const std::vector<HfdPoint>& points, const std::string& path) {
+  Canvas cv(640, 480);
+  const int x0 = 60, y0 = 430, x1 = 620, y1 = 20;  // plot area: (x0, y0) bottom left
+  double smax = 0.0;
+  for (const auto& p : points) smax = std::max(smax, p.build_seconds);
+  smax = smax > 0.0 ? smax * 1.05 : 1.0;
+  const double emin = -7.0, emax = 0.0;  // log10 pixel error; 0 error is drawn at the floor
+  auto ey = [&](double e) {
+    const double l = std::clamp(e > 0.0 ? std::log10(e) : emin, emin, emax);
+    return static_cast<int>(y0 - (l - emin) / (emax - emin) * (y0 - y1));
+  };
+  for (int x = x0; x <= x1; ++x) cv.set(x, y0, {0, 0, 0});
+  for (int y = y1; y <= y0; ++y) cv.set(x0, y, {0, 0, 0});
+  for (int k = 0; k <= 7; ++k) {
+    const int y = static_cast<int>(y0 - k / 7.0 * (y0 - y1));
+    for (int x = x0 - 4; x < x0; ++x) cv.set(x, y, {0, 0, 0});
+    for (int x = x0 + 1; x <= x1; x += 4) cv.set(x, y, {200, 200, 200});
+    cv.text(x0 - 40, y - 3, "1e" + std::to_string(k - 7));
+  }
+  for (int k = 0; k <= 4; ++k) {
+    const int x = static_cast<int>(x0 + k / 4.0 * (x1 - x0));
+    for (int y = y0; y < y0 + 4; ++y) cv.set(x, y, {0, 0, 0});
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", smax * k / 4.0);
+    cv.text(x - 10, y0 + 8, buf);
+  }
+  cv.text(x1 - 30, y0 + 24, "s");
+  for (size_t i = 0; i < points.size(); ++i) {
+    const int px = static_cast<int>(x0 + points[i].build_seconds / smax * (x1 - x0));
+    const int py = ey(points[i].stats.pixel_error_ratio);
+    const std::array<uint8_t, 3> c = points[i].vis.refine_rays ? std::array<uint8_t, 3>{200, 30, 30}
+                                                                : std::array<uint8_t, 3>{30, 30, 200};
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) cv.set(px + dx, py + dy, c);
+    cv.text(px + 4, py - 10, std::to_string(i + 1), c);
+  }
+  writePngRgb(path, cv.w, cv.h, cv.rgb);
+}
+
+int runHfdBench(const HfdBenchArgs& args) {
+  const auto t_all = std::chrono::steady_clock::now();
+  const Scene scene = loadScene(args.scene.scene, args.scene.loadOptions());
+  const BspTree bsp = buildBsp(scene);
+  std::fprintf(stderr, "bench hfd: %s: %zu polygons, %zu fragments, %zu levels\n", scene.name.c_str(),
+               scene.polygons.size(), bsp.fragments.size(), scene.levels.size());
+  const uint32_t levels = args.max_levels ? std::min<uint32_t>(args.max_levels, scene.levels.size())
+                                          : static_cast<uint32_t>(scene.levels.size());
+  RayRate rate;
+  {
+    const VisibilityScene vis = VisibilityScene::build(bsp);
+    rate = measureRays(scene, bsp, vis, args.ray_rate_rays);
+  }
+  std::vector<HfdPoint> points;
+  bool stopped = false;
+  for (uint32_t rs : args.region_samples)
+    for (uint32_t ps : args.polygon_samples)
+      for (uint32_t rr : args.refine_rays) {
+        if (secondsSince(t_all) > args.max_seconds) {
+          stopped = true;
+          continue;
+        }
+        HfdPoint pt;
+        pt.vis.region_samples = rs;
+        pt.vis.polygon_samples = ps;
+        pt.vis.refine_rays = rr;
+        const auto t0 = std::chrono::steady_clock::now();
+        const VisibilityScene vis = VisibilityScene::build(bsp, pt.vis);
+        TreeFile file;
+        file.kind = TreeKind::kHfd;
+        file.visibility = pt.vis;
+        file.eye_height = scene.eye_height;
+        PfdLevelOptions lo;
+        lo.tree.visibility = &vis;
+        lo.tree.stat_eyes = 0;
+        uint64_t used = 0;
+        for (uint32_t l = 0; l < levels; ++l)
+          file.levels.push_back(buildPfdLevel(bsp, scene.levels[l], l, scene.eye_height, lo, used));
+        pt.build_seconds = secondsSince(t0);
+        for (const PfdLevel& level : file.levels)
+          for (const PfdTree& t : level.cells) {
+            pt.rays += t.stats.visibility_rays;
+            pt.tests += t.stats.visibility_tests;
+            pt.rejected += t.stats.hidden_rejected;
+            pt.bytes += t.stats.bytes;
+          }
+        file.bsp = bsp;
+        HfdStatsOptions so;
+        so.views = args.views;
+        so.res = args.res;
+        pt.stats = computeHfdStats(file, so).overall;
+        std::fprintf(stderr,
+                     "  %zu: region %u polygon %u refine %u: build %.2f s, %llu rays (%.3g/s), %llu bytes, listed %.1f, "
+                     "pixel error %.3g, missed %.3f (%.1f%% of eyes)\n",
+                     points.size() + 1, rs, ps, rr, pt.build_seconds, static_cast<unsigned long long>(pt.rays),
+                     pt.rays / std::max(pt.build_seconds, 1e-9), static_cast<unsigned long long>(pt.bytes),
+                     pt.stats.listed_mean, pt.stats.pixel_error_ratio, pt.stats.missed_mean,
+                     100.0 * pt.stats.eyes_with_miss);
+        points.push_back(pt);
+      }
+  std::ofstream csv(args.csv);
+  if (!csv) throw SceneError(args.csv + ": cannot write");
+  csv << "point,scene,region_samples,polygon_samples,refine_rays,build_seconds,vis_tests,rays,rays_per_second,"
+         "ray_rate_fraction_1thread,rejected,tree_bytes,listed_mean,visible_mean,missed_mean,missed_max,"
+         "eyes_with_miss,pixel_error_ratio,pixel_error_ratio_max,rejection_ratio,overestimation,eyes,res\n";
+  std::printf("%s: %zu fragments, %u levels; Embree occlusion rays/s: %.3g (1 thread), %.3g (2 threads)\n",
+              scene.name.c_str(), bsp.fragments.size(), levels, rate.rays_per_second_1, rate.rays_per_second_2);
+  std::printf("%3s %6s %6s %6s %9s %11s %8s %11s %9s %10s %9s %6s %6s\n", "pt", "region", "poly", "refine",
+              "build_s", "rays", "rate%1t", "bytes", "listed", "pixel_err", "missed", "miss%", "overest");
+  for (size_t i = 0; i < points.size(); ++i) {
+    const HfdPoint& p = points[i];
+    const double rps = p.rays / std::max(p.build_seconds, 1e-9);
+    csv << i + 1 << ',' << scene.name << ',' << p.vis.region_samples << ',' << p.vis.polygon_samples << ','
+        << p.vis.refine_rays << ',' << p.build_seconds << ',' << p.tests << ',' << p.rays << ',' << rps << ','
+        << rps / rate.rays_per_second_1 << ',' << p.rejected << ',' << p.bytes << ',' << p.stats.listed_mean << ','
+        << p.stats.visible_mean << ',' << p.stats.missed_mean << ',' << p.stats.missed_max << ','
+        << p.stats.eyes_with_miss << ',' << p.stats.pixel_error_ratio << ',' << p.stats.pixel_error_ratio_max << ','
+        << p.stats.rejection_ratio << ',' << p.stats.overestimation << ',' << p.stats.eyes << ',' << args.res << '\n';
+    std::printf("%3zu %6u %6u %6u %9.2f %11llu %7.1f%% %11llu %9.1f %10.3g %9.3f %5.1f%% %6.2f\n", i + 1,
+                p.vis.region_samples, p.vis.polygon_samples, p.vis.refine_rays, p.build_seconds,
+                static_cast<unsigned long long>(p.rays), 100.0 * rps / rate.rays_per_second_1,
+                static_cast<unsigned long long>(p.bytes), p.stats.listed_mean, p.stats.pixel_error_ratio,
+                p.stats.missed_mean, 100.0 * p.stats.eyes_with_miss, p.stats.overestimation);
+  }
+  if (!csv) throw SceneError(args.csv + ": write failed");
+  if (!args.png.empty() && !points.empty()) drawPlot(points, args.png);
+  if (stopped) std::printf("(stopped after %.0f s: --max-seconds; later points skipped)\n", args.max_seconds);
+  std::printf("wrote %s, %s\n", args.csv.c_str(), args.png.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void addBenchHfd(CLI::App& bench, CommandRunner& runner) {
+  {
+    auto args = std::make_shared<HfdBenchArgs>();
+    CLI::App* sub = bench.add_subcommand("hfd", "HFD sampling knobs swept: build cost against pixel error (CSV, PNG)");
+    addSceneArgs(*sub, args->scene);
+    sub->add_option("--region-samples", args->region_samples, "Region samples per test (list)")->delimiter(',');
+    sub->add_option("--polygon-samples", args->polygon_samples, "Polygon samples per test (list)")->delimiter(',');
+    sub->add_option("--refine-rays", args->refine_rays, "Refinement rays per test (list)")->delimiter(',');
+    sub->add_option("--views", args->views, "Stats eyes per level")->check(CLI::Range(1u, 100000u));
+    sub->add_option("--res", args->res, "Stats cube face pixels per side")->check(CLI::Range(1, 4096));
+    sub->add_option("--max-levels", args->max_levels, "Only the first K levels (0: all)");
+    sub->add_option("--max-seconds", args->max_seconds, "Skip the remaining points after this long");
+    sub->add_option("--csv", args->csv, "CSV output");
+    sub->add_option("--png", args->png, "Plot output (empty: none)");
+    sub->callback([args, &runner] { runner = [args] { return runHfdBench(*args); }; });
+  }
+  {
+    auto args = std::make_shared<RaysArgs>();
+    CLI::App* sub = bench.add_subcommand("rays", "Embree occlusion rays/s on the scene, 1 and 2 threads");
+    addSceneArgs(*sub, args->scene);
+    sub->add_option("--rays", args->rays, "Segments cast per thread count")->check(CLI::Range(1ull, 1000000000ull));
+    sub->callback([args, &runner] { runner = [args] { return runRaysBench(*args); }; });
+  }
+}
+
+}  // namespace walkvis

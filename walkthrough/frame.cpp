@@ -1,0 +1,260 @@
+// Walkthrough frames (frame.h): the order sources are the BSP back-to-front traversal (Fuchs, Kedem,
+// Naylor 1980) and the PFD/HFD trees (James & Day 1998; DESIGN.md "PFD tree", "HFD tree"); backface
+// culling inside priority lists is backface/list_cull.h (DESIGN.md "Facing at emission").
+#include "walkthrough/frame.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <numeric>
+
+#include <glm/geometric.hpp>
+
+namespace walkvis {
+namespace {
+
+// pfd_io.cpp's magic: a tree file is told from a scene spec by its first bytes.
+constexpr char kTreeMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
+
+bool isTreeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  char head[8] = {};
+  in.read(head, 8);
+  return in.gcount() == 8 && std::memcmp(head, kTreeMagic, 8) == 0;
+}
+
+bool isRunTimeMethod(ListCullMethod m) {
+  return m == ListCullMethod::kPolygon || m == ListCullMethod::kMask || m == ListCullMethod::kCluster ||
+         m == ListCullMethod::kHierarchy;
+}
+
+// A tree file holds the BSP and the trees, not the scene: the fragments stand in for the polygons,
+// the trees' regions for the walkable levels, and the stable faceColor() for the colours.
+Scene sceneFromTrees(const TreeFile& trees, const std::string& source) {
+  Scene scene;
+  scene.name = source;
+  scene.vertices = trees.bsp.vertices;
+  scene.polygons = trees.bsp.fragments;
+  uint32_t faces = 0;
+  for (const Polygon& p : scene.polygons) faces = std::max(faces, p.face_id + 1);
+  scene.face_colors.resize(faces);
+  for (uint32_t f = 0; f < faces; ++f) scene.face_colors[f] = faceColor(f);
+  scene.eye_height = trees.eye_height;
+  for (const PfdLevel& level : trees.levels) {
+    FloorLevel fl;
+    fl.floor_y = level.floor_y;
+    for (const PfdTree& cell : level.cells)
+      for (const auto& piece : cell.region) fl.walkable.push_back(piece);
+    scene.levels.push_back(std::move(fl));
+  }
+  scene.start_eye = glm::dvec3(0.0);
+  placeStartEye(scene);
+  return scene;
+}
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The circular cone around the camera's frustum (list_cull.h's view cone): the full apex angle
+// through the image's corners.
+BackfaceView backfaceView(const FreeCamera& camera, const glm::dvec3& eye) {
+  const double cp = std::cos(camera.pitch);
+  BackfaceView view;
+  view.eye = eye;
+  view.view_dir = glm::dvec3(-std::sin(camera.yaw) * cp, std::sin(camera.pitch), -std::cos(camera.yaw) * cp);
+  const double aspect = static_cast<double>(camera.width) / std::max(camera.height, 1);
+  const double t = std::tan(0.5 * camera.fov_y);
+  view.fov = std::min(2.0 * std::atan(t * std::sqrt(1.0 + aspect * aspect)), 3.14);
+  return view;
+}
+
+}  // namespace
+
+std::string_view orderModeName(OrderMode mode) {
+  switch (mode) {
+    case OrderMode::kZBuffer: return "zbuffer";
+    case OrderMode::kBsp: return "bsp";
+    case OrderMode::kPfd: return "pfd";
+    case OrderMode::kHfd: return "hfd";
+  }
+  return "?";
+}
+
+OrderMode parseOrderMode(std::string_view name) {
+  for (OrderMode m : {OrderMode::kZBuffer, OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd})
+    if (orderModeName(m) == name) return m;
+  throw SceneError("order mode '" + std::string(name) + "': expected zbuffer, bsp, pfd or hfd");
+}
+
+std::optional<uint32_t> World::levelAt(const glm::dvec3& eye) const {
+  for (size_t i = 0; i < trees.levels.size(); ++i) {
+    const double h = trees.levels[i].height;
+    // Paths store eyes in decimal text: a height read back may be off by a few ulps of its scale.
+    if (std::abs(eye.y - h) <= 1e-9 * std::max(1.0, std::abs(h))) return static_cast<uint32_t>(i);
+  }
+  return std::nullopt;
+}
+
+World openWorld(const std::string& source, const WorldOptions& options,
+                const std::function<void(const std::string&)>& progress) {
+  auto say = [&](const std::string& line) {
+    if (progress) progress(line);
+  };
+  World world;
+  world.source = source;
+  world.cull = options.cull;
+  if (isTreeFile(source)) {
+    say("loading tree file " + source);
+    world.trees = loadTreeFile(source);
+    if (!options.scene.empty()) {
+      world.scene = loadScene(options.scene, options.load);
+      checkBspMatchesScene(world.trees.bsp, world.scene, source);
+      world.scene.eye_height = world.trees.eye_height;
+    } else {
+      world.scene = sceneFromTrees(world.trees, source);
+    }
+  } else {
+    say("loading " + source);
+    world.scene = loadScene(source, options.load);
+    say("building the BSP of " + std::to_string(world.scene.polygons.size()) + " polygons");
+    world.trees.bsp = buildBsp(world.scene);
+    world.trees.eye_height = world.scene.eye_height;
+    if (options.build_pfd) {
+      PfdLevelOptions level_options;
+      level_options.tree.stat_eyes = 0;
+      // Run-time methods need the back faces in the lists; otherwise the exact region method.
+      level_options.tree.drop_back_faces = !isRunTimeMethod(options.cull);
+      uint64_t used = 0;
+      for (size_t l = 0; l < world.scene.levels.size(); ++l)
+        world.trees.levels.push_back(buildPfdLevel(world.trees.bsp, world.scene.levels[l], static_cast<uint32_t>(l),
+                                                   world.scene.eye_height, level_options, used, progress));
+    }
+  }
+  const BspTree& bsp = world.trees.bsp;
+  const uint32_t n = static_cast<uint32_t>(bsp.fragments.size());
+  world.objects = makeObjects(options.objects, options.scene.empty() ? source : options.scene, world.scene, n);
+  if (options.cull != ListCullMethod::kNone) {
+    say(std::string("building list cullers (") + std::string(listCullMethodName(options.cull)) + ")");
+    const BackfaceInput input{bsp.vertices, bsp.fragments};
+    world.all_fragments.resize(n);
+    std::iota(world.all_fragments.begin(), world.all_fragments.end(), 0u);
+    const IndexRange all{0, n};
+    world.all_culler = std::make_unique<ListCuller>(
+        ListCuller::build(input, world.all_fragments, std::span<const IndexRange>(&all, 1), options.cull,
+                          options.backface));
+    if (isRunTimeMethod(options.cull)) {
+      std::vector<IndexRange> ranges;
+      for (const PfdLevel& level : world.trees.levels) {
+        auto& per_cell = world.run_cullers.emplace_back();
+        for (const PfdTree& tree : level.cells) {
+          ranges.clear();
+          for (const PfdRun& r : tree.runs) ranges.push_back({r.first, r.count});
+          per_cell.push_back(ListCuller::build(input, tree.fragment_ids, ranges, options.cull, options.backface));
+        }
+      }
+    }
+  }
+  return world;
+}
+
+FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, OrderMode mode,
+                               std::vector<uint32_t>& draw, double time) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const BspTree& bsp = world.trees.bsp;
+  const uint32_t n = static_cast<uint32_t>(bsp.fragments.size());
+  FrameStats stats;
+  stats.scene_polygons = n;
+  draw.clear();
+  const ListCullMethod method = world.all_culler ? world.cull : ListCullMethod::kNone;
+
+  if (mode == OrderMode::kZBuffer) {
+    stats.used = OrderMode::kZBuffer;
+    stats.listed = n;
+    if (method != ListCullMethod::kNone) {
+      stats.culled = world.all_culler->cullRange(0, backfaceView(camera, camera.eye), draw);
+    } else {
+      draw.resize(n);
+      std::iota(draw.begin(), draw.end(), 0u);
+    }
+  } else {
+    bool done = false;
+    if (mode == OrderMode::kPfd || mode == OrderMode::kHfd) {
+      if (const std::optional<uint32_t> level = world.levelAt(camera.eye)) {
+        const PfdLevel& pl = world.trees.levels[*level];
+        // The tree answers for eyes ON its height plane: snap the few ulps a path file may add.
+        const glm::dvec3 eye(camera.eye.x, pl.height, camera.eye.z);
+        if (const PfdTree* tree = findPfdCell(pl, eye); tree && !tree->nodes.empty()) {
+          // pfdQueryRuns' walk, keeping run indices: the list cullers are per run.
+          run_indices_.clear();
+          uint32_t i = 0;
+          for (;;) {
+            const PfdNode& node = tree->nodes[i];
+            for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r)
+              run_indices_.push_back(tree->run_refs[r]);
+            if (node.front < 0) break;
+            const int s = planeSide(tree->planes[node.plane], eye);
+            ++stats.tests;
+            i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
+          }
+          const ListCuller* culler = nullptr;
+          if (*level < world.run_cullers.size()) {
+            const size_t cell = static_cast<size_t>(tree - pl.cells.data());
+            if (cell < world.run_cullers[*level].size()) culler = &world.run_cullers[*level][cell];
+          }
+          const BackfaceView view = backfaceView(camera, eye);
+          for (uint32_t r : run_indices_) {
+            const PfdRun& run = tree->runs[r];
+            stats.listed += run.count;
+            if (culler) {
+              stats.culled += culler->cullRange(r, view, draw);
+            } else {
+              draw.insert(draw.end(), tree->fragment_ids.begin() + run.first,
+                          tree->fragment_ids.begin() + run.first + run.count);
+            }
+          }
+          stats.level = static_cast<int>(*level);
+          stats.used = mode;
+          done = true;
+        }
+      }
+    }
+    if (!done) {
+      // The BSP path: any eye (off the height plane, stairs, no tree).
+      stats.used = OrderMode::kBsp;
+      stats.tests = static_cast<uint32_t>(bsp.nodes.size());
+      stats.listed = n;
+      if (method == ListCullMethod::kNone) {
+        backToFront(bsp, camera.eye, draw, false);
+      } else if (method == ListCullMethod::kPolygon || method == ListCullMethod::kRegion) {
+        // The per-polygon plane test, fused into the traversal (the same test, exact).
+        backToFront(bsp, camera.eye, draw, true);
+      } else {
+        backToFront(bsp, camera.eye, scratch_, false);
+        run_indices_.clear();
+        world.all_culler->cullRange(0, backfaceView(camera, camera.eye), run_indices_);
+        keep_.assign(n, 0);
+        for (uint32_t f : run_indices_) keep_[f] = 1;
+        for (uint32_t f : scratch_)
+          if (keep_[f]) draw.push_back(f);
+      }
+      stats.culled = n - static_cast<uint32_t>(draw.size());
+    }
+  }
+  stats.drawn = static_cast<uint32_t>(draw.size());
+  stats.order_ms = msSince(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  objects_.resize(world.objects.size());
+  for (size_t k = 0; k < world.objects.size(); ++k) {
+    tessellateObject(world.objects[k], time, camera.eye, world.object_culling, objects_[k]);
+    stats.object_triangles += objects_[k].drawn();
+    stats.object_triangles_computed += objects_[k].computed;
+  }
+  stats.object_ms = msSince(t1);
+  return stats;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,182 @@
+// Hidden-polygon rejection statistics (DESIGN.md "Validation and statistics"; the HFD tree of
+// James & Day, "The hidden face determination tree", 1998): listed fragments against an exact
+// 360° item buffer (walkthrough/raycast.h) at random eyes of every level.
+#include "walkthrough/hfd_stats.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include "walkthrough/camera.h"
+#include "walkthrough/raycast.h"
+
+namespace walkvis {
+namespace {
+
+size_t missedBin(uint32_t missed) {
+  if (missed < 4) return missed;
+  if (missed < 8) return 4;
+  if (missed < 16) return 5;
+  return 6;
+}
+
+size_t pixelErrorBin(double ratio) {
+  if (!(ratio > 0.0)) return 0;
+  double bound = 1e-6;
+  for (size_t b = 1; b < 6; ++b, bound *= 10.0)
+    if (ratio <= bound) return b;
+  return 6;
+}
+
+void finish(HfdSummary& s, double listed_sum, double visible_sum, double missed_sum, double rejection_sum,
+            double over_sum, uint64_t over_eyes, double tests_sum, uint64_t eyes_missing) {
+  if (s.eyes == 0) return;
+  const double n = static_cast<double>(s.eyes);
+  s.listed_mean = listed_sum / n;
+  s.visible_mean = visible_sum / n;
+  s.missed_mean = missed_sum / n;
+  s.rejection_ratio = rejection_sum / n;
+  s.overestimation = over_eyes ? over_sum / static_cast<double>(over_eyes) : 0.0;
+  s.tests_mean = tests_sum / n;
+  s.eyes_with_miss = static_cast<double>(eyes_missing) / n;
+  s.pixel_error_ratio = s.pixels ? static_cast<double>(s.error_pixels) / static_cast<double>(s.pixels) : 0.0;
+}
+
+HfdSummary summarise(std::span<const HfdEyeStats> eyes, uint64_t fragments) {
+  HfdSummary s;
+  s.fragments = fragments;
+  double listed = 0, visible = 0, missed = 0, rejection = 0, over = 0, tests = 0;
+  uint64_t over_eyes = 0, missing = 0;
+  for (const HfdEyeStats& e : eyes) {
+    ++s.eyes;
+    listed += e.listed;
+    visible += e.visible;
+    missed += e.missed;
+    tests += e.tests;
+    s.listed_max = std::max(s.listed_max, e.listed);
+    s.visible_max = std::max(s.visible_max, e.visible);
+    s.missed_max = std::max(s.missed_max, e.missed);
+    s.error_pixels += e.error_pixels;
+    s.pixels += e.pixels;
+    const double ratio = e.pixels ? static_cast<double>(e.error_pixels) / static_cast<double>(e.pixels) : 0.0;
+    s.pixel_error_ratio_max = std::max(s.pixel_error_ratio_max, ratio);
+    ++s.missed_histogram[missedBin(e.missed)];
+    ++s.pixel_error_histogram[pixelErrorBin(ratio)];
+    if (fragments) rejection += 1.0 - static_cast<double>(e.listed) / static_cast<double>(fragments);
+    if (e.visible) {
+      over += static_cast<double>(e.listed) / e.visible;
+      ++over_eyes;
+    }
+    if (e.missed) ++missing;
+  }
+  finish(s, listed, visible, missed, rejection, over, over_eyes, tests, missing);
+  return s;
+}
+
+uint64_t splitmix(uint64_t& state) {
+  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
+                         const std::function<void(const std::string&)>& progress) {
+  if (options.views == 0 || options.res <= 0 || options.res > 8192)
+    throw SceneError("stats: --views must be > 0 and --res in [1, 8192]");
+  const auto t0 = std::chrono::steady_clock::now();
+  const BspTree& bsp = file.bsp;
+  const uint64_t n = bsp.fragments.size();
+  HfdStats out;
+  if (n == 0) return out;
+  // Camera depth range: everything of the model from anywhere inside it. near is far below any
+  // feature the item buffer can resolve, yet keeps single-precision depths meaningful.
+  glm::dvec3 lo = bsp.vertices[0], hi = bsp.vertices[0];
+  for (const auto& v : bsp.vertices) {
+    lo = glm::min(lo, v);
+    hi = glm::max(hi, v);
+  }
+  const double extent = std::max(glm::length(hi - lo), 1e-9);
+  const RayCaster caster(bsp.vertices, bsp.fragments);
+  std::vector<RayHit> hits;
+  std::vector<uint32_t> order;
+  std::vector<uint32_t> listed_stamp(n, 0), visible_stamp(n, 0);
+  uint32_t stamp = 0;
+  uint64_t rng = options.seed ^ 0x5DEECE66Dull;
+  for (size_t li = 0; li < file.levels.size(); ++li) {
+    const PfdLevel& level = file.levels[li];
+    std::vector<double> cum;
+    double total = 0.0;
+    for (const PfdTree& t : level.cells) cum.push_back(total += std::max(t.stats.region_area, 0.0));
+    if (level.cells.empty() || !(total > 0.0)) continue;
+    const size_t first_eye = out.eyes.size();
+    for (uint32_t k = 0; k < options.views; ++k) {
+      const double pick = static_cast<double>(splitmix(rng) >> 11) * 0x1.0p-53 * total;
+      size_t c = std::lower_bound(cum.begin(), cum.end(), pick) - cum.begin();
+      c = std::min(c, cum.size() - 1);
+      const PfdTree& cell = level.cells[c];
+      const glm::dvec2 p = samplePfdRegion(cell, rng);
+      const glm::dvec3 eye(p.x, cell.height, p.y);
+      // The tree the walkthrough would use there (cells are half-open; a sample on a shared cell
+      // side belongs to the neighbour).
+      const PfdTree* tree = findPfdCell(level, eye);
+      if (!tree) tree = &cell;
+      HfdEyeStats e;
+      e.level = level.level;
+      e.eye = eye;
+      e.tests = pfdQuery(*tree, eye, order).tests;
+      if (++stamp == 0) {  // wrapped: clear the stamps
+        std::fill(listed_stamp.begin(), listed_stamp.end(), 0);
+        std::fill(visible_stamp.begin(), visible_stamp.end(), 0);
+        stamp = 1;
+      }
+      for (uint32_t f : order)
+        if (f < n && listed_stamp[f] != stamp) {
+          listed_stamp[f] = stamp;
+          ++e.listed;
+        }
+      const std::vector<uint8_t> front = caster.frontFacing(eye);
+      for (int face = 0; face < kCubeFaces; ++face) {
+        View view;
+        view.eye = eye;
+        view.face = face;
+        view.size = options.res;
+        view.near = 1e-6 * extent;
+        view.far = 4.0 * extent;
+        caster.castNearest(view, front, hits);
+        e.pixels += hits.size();
+        for (const RayHit& h : hits) {
+          if (h.polygon == kNoPolygon || h.polygon >= n) continue;
+          if (visible_stamp[h.polygon] != stamp) {
+            visible_stamp[h.polygon] = stamp;
+            ++e.visible;
+            if (listed_stamp[h.polygon] != stamp) ++e.missed;
+          }
+          if (listed_stamp[h.polygon] != stamp) ++e.error_pixels;
+        }
+      }
+      out.eyes.push_back(e);
+      if (progress && ((k + 1) % 50 == 0 || k + 1 == options.views)) {
+        char line[160];
+        std::snprintf(line, sizeof line, "stats: level %u: %u/%u eyes", level.level, k + 1, options.views);
+        progress(line);
+      }
+    }
+    HfdLevelSummary ls;
+    ls.level = level.level;
+    ls.height = level.height;
+    ls.summary = summarise(std::span<const HfdEyeStats>(out.eyes).subspan(first_eye), n);
+    out.levels.push_back(ls);
+  }
+  out.overall = summarise(out.eyes, n);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,254 @@
+// Walking physics: segment and ball queries against the walls through the BSP tree (Fuchs, Kedem,
+// Naylor 1980: a query shape descends only into the half-spaces it reaches, as in BSP ray
+// tracing, Naylor & Thibault 1986), and a grid over the floor levels' walkable pieces.
+#include "walkthrough/movement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+namespace walkvis {
+
+namespace {
+
+// Distance from p to a convex planar polygon (vertices CCW around plane.n), with the in-polygon
+// test enlarged by tol (so seams between fragments are closed).
+double pointPolygonDistance(std::span<const glm::dvec3> v, const Plane& plane, const glm::dvec3& p, double tol) {
+  const double s = glm::dot(plane.n, p) - plane.d;
+  const glm::dvec3 q = p - s * plane.n;
+  bool inside = true;
+  const size_t n = v.size();
+  for (size_t i = 0; i < n && inside; ++i) {
+    const glm::dvec3 e = v[(i + 1) % n] - v[i];
+    const double len = glm::length(e);
+    if (glm::dot(glm::cross(e, q - v[i]), plane.n) < -tol * len) inside = false;
+  }
+  if (inside) return std::abs(s);
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec3 a = v[i], e = v[(i + 1) % n] - v[i];
+    const double ee = glm::dot(e, e);
+    const double t = ee > 0.0 ? std::clamp(glm::dot(p - a, e) / ee, 0.0, 1.0) : 0.0;
+    best = std::min(best, glm::length(p - (a + t * e)));
+  }
+  return best;
+}
+
+bool pointInPolygon(std::span<const glm::dvec3> v, const Plane& plane, const glm::dvec3& q, double tol) {
+  const size_t n = v.size();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::dvec3 e = v[(i + 1) % n] - v[i];
+    if (glm::dot(glm::cross(e, q - v[i]), plane.n) < -tol * glm::length(e)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Walker::Walker(const Scene& scene, const BspTree& bsp, const MoveOptions& options) : scene_(scene), bsp_(bsp) {
+  radius_ = options.radius_factor * scene.eye_height;
+  step_ = options.step_factor * scene.eye_height;
+  const Bounds b = sceneBounds(scene);
+  double scale = 1.0;
+  for (int k = 0; k < 3; ++k) scale = std::max({scale, std::abs(b.lo[k]), std::abs(b.hi[k])});
+  tol_ = 1e-9 * scale;
+
+  double total = 0.0;
+  double lx = std::numeric_limits<double>::infinity(), lz = lx, hx = -lx, hz = -lx;
+  for (uint32_t l = 0; l < scene.levels.size(); ++l) {
+    const auto& pieces = scene.levels[l].walkable;
+    for (uint32_t i = 0; i < pieces.size(); ++i) {
+      if (pieces[i].size() < 3) continue;
+      Piece p{l, i, pieces[i][0].x, pieces[i][0].y, pieces[i][0].x, pieces[i][0].y};
+      double area2 = 0.0;
+      for (size_t k = 0; k < pieces[i].size(); ++k) {
+        const glm::dvec2 u = pieces[i][k], w = pieces[i][(k + 1) % pieces[i].size()];
+        p.lo_x = std::min(p.lo_x, u.x), p.hi_x = std::max(p.hi_x, u.x);
+        p.lo_z = std::min(p.lo_z, u.y), p.hi_z = std::max(p.hi_z, u.y);
+        area2 += u.x * w.y - w.x * u.y;
+      }
+      lx = std::min(lx, p.lo_x), hx = std::max(hx, p.hi_x), lz = std::min(lz, p.lo_z), hz = std::max(hz, p.hi_z);
+      pieces_.push_back(p);
+      total += std::abs(area2) * 0.5;
+      piece_area_cumulative_.push_back(total);
+    }
+  }
+  if (pieces_.empty()) return;
+  // About two cells per piece, at most 512 per side: a few pieces per cell on Freedoom maps.
+  const double w = std::max(hx - lx, tol_), h = std::max(hz - lz, tol_);
+  const double cells = std::min(2.0 * pieces_.size(), 512.0 * 512.0);
+  cell_ = std::sqrt(w * h / cells);
+  grid_nx_ = std::clamp(static_cast<int>(std::ceil(w / cell_)), 1, 512);
+  grid_nz_ = std::clamp(static_cast<int>(std::ceil(h / cell_)), 1, 512);
+  cell_ = std::max(w / grid_nx_, h / grid_nz_) * (1.0 + 1e-12);
+  grid_x0_ = lx, grid_z0_ = lz;
+  std::vector<std::vector<uint32_t>> cells_of(static_cast<size_t>(grid_nx_) * grid_nz_);
+  auto cellIndex = [&](double v, double v0, int n) {
+    return std::clamp(static_cast<int>(std::floor((v - v0) / cell_)), 0, n - 1);
+  };
+  for (uint32_t i = 0; i < pieces_.size(); ++i) {
+    const Piece& p = pieces_[i];
+    const int x0 = cellIndex(p.lo_x - tol_, grid_x0_, grid_nx_), x1 = cellIndex(p.hi_x + tol_, grid_x0_, grid_nx_);
+    const int z0 = cellIndex(p.lo_z - tol_, grid_z0_, grid_nz_), z1 = cellIndex(p.hi_z + tol_, grid_z0_, grid_nz_);
+    for (int z = z0; z <= z1; ++z)
+      for (int x = x0; x <= x1; ++x) cells_of[static_cast<size_t>(z) * grid_nx_ + x].push_back(i);
+  }
+  cell_start_.push_back(0);
+  for (const auto& c : cells_of) {
+    cell_pieces_.insert(cell_pieces_.end(), c.begin(), c.end());
+    cell_start_.push_back(static_cast<uint32_t>(cell_pieces_.size()));
+  }
+}
+
+bool Walker::insidePiece(const Piece& p, double x, double z) const {
+  if (x < p.lo_x - tol_ || x > p.hi_x + tol_ || z < p.lo_z - tol_ || z > p.hi_z + tol_) return false;
+  const auto& ring = scene_.levels[p.level].walkable[p.index];
+  bool neg = false, pos = false;
+  for (size_t k = 0; k < ring.size(); ++k) {
+    const glm::dvec2 u = ring[k], w = ring[(k + 1) % ring.size()];
+    const glm::dvec2 e = w - u;
+    const double c = e.x * (z - u.y) - e.y * (x - u.x);
+    const double slack = tol_ * std::hypot(e.x, e.y);
+    if (c < -slack) neg = true;
+    if (c > slack) pos = true;
+  }
+  return !(neg && pos);
+}
+
+std::optional<uint32_t> Walker::levelUnder(double x, double z, double max_floor_y) const {
+  if (pieces_.empty() || !std::isfinite(x) || !std::isfinite(z)) return std::nullopt;
+  const double fx = (x - grid_x0_) / cell_, fz = (z - grid_z0_) / cell_;
+  if (fx < -1.0 || fz < -1.0 || fx > grid_nx_ + 1.0 || fz > grid_nz_ + 1.0) return std::nullopt;
+  const int cx = std::clamp(static_cast<int>(std::floor(fx)), 0, grid_nx_ - 1);
+  const int cz = std::clamp(static_cast<int>(std::floor(fz)), 0, grid_nz_ - 1);
+  const size_t c = static_cast<size_t>(cz) * grid_nx_ + cx;
+  std::optional<uint32_t> best;
+  for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+    const Piece& p = pieces_[cell_pieces_[k]];
+    const double fy = scene_.levels[p.level].floor_y;
+    if (fy > max_floor_y) continue;
+    if (best && scene_.levels[*best].floor_y >= fy) continue;
+    if (insidePiece(p, x, z)) best = p.level;
+  }
+  return best;
+}
+
+std::optional<std::pair<glm::dvec2, uint32_t>> Walker::randomWalkablePoint(std::mt19937_64& rng) const {
+  if (pieces_.empty() || !(piece_area_cumulative_.back() > 0.0)) return std::nullopt;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double pick = unit(rng) * piece_area_cumulative_.back();
+  const size_t i = std::min<size_t>(
+      std::upper_bound(piece_area_cumulative_.begin(), piece_area_cumulative_.end(), pick) -
+          piece_area_cumulative_.begin(),
+      pieces_.size() - 1);
+  const auto& ring = scene_.levels[pieces_[i].level].walkable[pieces_[i].index];
+  // A fan triangle by area, then a uniform point in it.
+  std::vector<double> cum;
+  double acc = 0.0;
+  for (size_t k = 1; k + 1 < ring.size(); ++k) {
+    const glm::dvec2 e1 = ring[k] - ring[0], e2 = ring[k + 1] - ring[0];
+    acc += std::abs(e1.x * e2.y - e1.y * e2.x);
+    cum.push_back(acc);
+  }
+  const double t = unit(rng) * acc;
+  const size_t k = std::min<size_t>(std::upper_bound(cum.begin(), cum.end(), t) - cum.begin(), cum.size() - 1) + 1;
+  double r1 = unit(rng), r2 = unit(rng);
+  if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
+  const glm::dvec2 p = ring[0] + r1 * (ring[k] - ring[0]) + r2 * (ring[k + 1] - ring[0]);
+  return std::make_pair(p, pieces_[i].level);
+}
+
+bool Walker::wallBlocks(uint32_t f, const glm::dvec3& a, const glm::dvec3& b, double radius) const {
+  const Plane& pl = bsp_.fragments[f].plane;
+  if (!(std::abs(pl.n.y) < kWallMaxNormalY)) return false;
+  const auto v = bsp_.fragmentVertices(f);
+  const double sa = glm::dot(pl.n, a) - pl.d, sb = glm::dot(pl.n, b) - pl.d;
+  // Crossing: strictly from one side to the other, or ending on the plane, inside the polygon.
+  if ((sa > tol_ && sb < -tol_) || (sa < -tol_ && sb > tol_)) {
+    const glm::dvec3 p = a + (sa / (sa - sb)) * (b - a);
+    if (pointInPolygon(v, pl, p, tol_)) return true;
+  } else if (std::abs(sb) <= tol_ && pointInPolygon(v, pl, b, tol_)) {
+    return true;
+  }
+  if (radius > 0.0 && std::abs(sb) < radius) {
+    const double db = pointPolygonDistance(v, pl, b, tol_);
+    if (db < radius && db < pointPolygonDistance(v, pl, a, tol_) - tol_) return true;
+  }
+  return false;
+}
+
+bool Walker::blocks(int32_t node_index, const glm::dvec3& a, const glm::dvec3& b, double radius,
+                    glm::dvec3* blocker) const {
+  // Explicit stack: BSP depth can be large on big maps.
+  std::vector<int32_t> stack{node_index};
+  while (!stack.empty()) {
+    const int32_t ni = stack.back();
+    stack.pop_back();
+    if (ni < 0) continue;
+    const BspNode& node = bsp_.nodes[ni];
+    const double sa = glm::dot(node.plane.n, a) - node.plane.d, sb = glm::dot(node.plane.n, b) - node.plane.d;
+    const double lo = std::min(sa, sb - radius) - tol_, hi = std::max(sa, sb + radius) + tol_;
+    if (lo <= 0.0 && hi >= 0.0) {
+      for (uint32_t k = 0; k < node.fragment_count; ++k) {
+        const uint32_t f = node.first_fragment + k;
+        if (wallBlocks(f, a, b, radius)) {
+          if (blocker) *blocker = bsp_.fragments[f].plane.n;
+          return true;
+        }
+      }
+    }
+    if (hi > 0.0) stack.push_back(node.front);
+    if (lo < 0.0) stack.push_back(node.back);
+  }
+  return false;
+}
+
+bool Walker::segmentClear(const glm::dvec3& a, const glm::dvec3& b, double radius, glm::dvec3* blocker) const {
+  if (bsp_.root < 0) return true;
+  return !blocks(bsp_.root, a, b, radius, blocker);
+}
+
+WalkState Walker::place(const glm::dvec3& eye) const {
+  const auto level = levelUnder(eye.x, eye.z, eye.y - scene_.eye_height + step_ + tol_);
+  if (!level) return {eye, -1};
+  return {{eye.x, scene_.levels[*level].floor_y + scene_.eye_height, eye.z}, static_cast<int>(*level)};
+}
+
+std::optional<WalkState> Walker::tryMove(const WalkState& from, const glm::dvec2& d) const {
+  if (!std::isfinite(d.x) || !std::isfinite(d.y)) return std::nullopt;
+  const glm::dvec3 mid{from.eye.x + d.x, from.eye.y, from.eye.z + d.y};
+  if (!segmentClear(from.eye, mid, radius_)) return std::nullopt;
+  const double floor_now =
+      from.level >= 0 ? scene_.levels[from.level].floor_y : from.eye.y - scene_.eye_height;
+  const auto level = levelUnder(mid.x, mid.z, floor_now + step_ + tol_);
+  if (!level) {
+    if (from.level >= 0) return std::nullopt;  // walking off the walkable region
+    return WalkState{mid, -1};
+  }
+  const WalkState to{{mid.x, scene_.levels[*level].floor_y + scene_.eye_height, mid.z}, static_cast<int>(*level)};
+  // Vertically only crossings matter: stepping up or dropping down beside a riser is the point.
+  if (to.eye.y != mid.y && !segmentClear(mid, to.eye, 0.0)) return std::nullopt;
+  return to;
+}
+
+WalkState Walker::move(const WalkState& from, const glm::dvec2& d) const {
+  if (d.x == 0.0 && d.y == 0.0) return from;
+  if (auto to = tryMove(from, d)) return *to;
+  glm::dvec3 n;
+  const glm::dvec3 mid{from.eye.x + d.x, from.eye.y, from.eye.z + d.y};
+  if (!segmentClear(from.eye, mid, radius_, &n)) {
+    const glm::dvec2 nh{n.x, n.z};
+    const double len = std::hypot(nh.x, nh.y);
+    if (len > 0.0) {
+      const glm::dvec2 u = nh / len;
+      if (auto to = tryMove(from, d - glm::dot(d, u) * u)) return *to;
+    }
+  }
+  if (auto to = tryMove(from, {d.x, 0.0})) return *to;
+  if (auto to = tryMove(from, {0.0, d.y})) return *to;
+  return from;
+}
+
+}  // namespace walkvis

@@ -1,0 +1,98 @@
+// Walking physics for the window and the automatic tour: the eye stays at eye height above the
+// floor under it, steps up at most a step height onto another floor level (switching the level,
+// hence the tree the frame uses), drops down any height, never crosses a wall and keeps a radius
+// away from walls it approaches, sliding along them.
+//
+// Walls are the fragments of the BSP whose plane is not horizontal (|n.y| < kWallMaxNormalY):
+// floors and ceilings are the floor levels' business. A move is a horizontal segment at the eye's
+// height, then (at the new x, z) a vertical segment to the new eye height; both are tested against
+// the walls through the BSP (the segment and a ball at its end descend only the subtrees they
+// reach). Guarantees (double precision, walls enlarged by a tolerance of 1e-9 of the scene's scale
+// so that the seam between two fragments of one wall is never a gap):
+//  * no accepted move's segment crosses a wall fragment or ends on one;
+//  * a move never ends within `radius` of a wall unless it increases the distance to that wall
+//    (only sliding or falling can leave the eye within radius: the eye can always move away).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "bsp/bsp.h"
+#include "scenes/scene.h"
+
+namespace walkvis {
+
+constexpr double kWallMaxNormalY = 0.9;  // |n.y| below this: a wall (slopes up to ~64° count as walls)
+
+struct MoveOptions {
+  double radius_factor = 0.15;  // radius = factor × eye height (WAD: 6.15 units; 1.7 m eye: 0.255 m)
+  double step_factor = 0.6;     // step height = factor × eye height (WAD: 24.6 ≥ Doom's 24-unit steps)
+};
+
+struct WalkState {
+  glm::dvec3 eye{0.0};
+  int level = -1;  // index into Scene::levels whose floor is under the eye; -1 off the walkable region
+};
+
+class Walker {
+ public:
+  // Keeps references to scene and bsp (which must outlive it); bsp is the scene's BSP.
+  Walker(const Scene& scene, const BspTree& bsp, const MoveOptions& options = {});
+
+  double radius() const { return radius_; }
+  double stepHeight() const { return step_; }
+
+  // The eye put onto the floor under its (x, z): the highest level there whose floor is at most
+  // eye.y − eye height + step height, at exactly floor_y + eye height. Unchanged with level -1
+  // when there is none.
+  WalkState place(const glm::dvec3& eye) const;
+
+  // Moves by delta_xz (x, z) with collision and sliding: the full move when it is allowed, else
+  // the move slid along the blocking wall, else along x or z alone, else no move. On a level the
+  // new (x, z) must have a floor at most a step height above the current one (the highest such is
+  // taken). Off the walkable region (level -1) the eye moves at its height and lands on a floor
+  // reachable by a step down or up.
+  WalkState move(const WalkState& from, const glm::dvec2& delta_xz) const;
+
+  // One step without sliding: nullopt when blocked (by a wall or by having no floor to go to).
+  std::optional<WalkState> tryMove(const WalkState& from, const glm::dvec2& delta_xz) const;
+
+  // True when the segment a→b crosses no wall and (radius > 0) b is not within radius of a wall
+  // that it is nearer than a. *blocker gets the unit normal of a blocking wall when not clear.
+  bool segmentClear(const glm::dvec3& a, const glm::dvec3& b, double radius,
+                    glm::dvec3* blocker = nullptr) const;
+
+  // The highest level containing (x, z) (boundary inclusive) with floor_y <= max_floor_y.
+  std::optional<uint32_t> levelUnder(double x, double z, double max_floor_y) const;
+  // A uniformly random point of the walkable region (all levels, by area) and its level; nullopt
+  // for a scene without walkable area.
+  std::optional<std::pair<glm::dvec2, uint32_t>> randomWalkablePoint(std::mt19937_64& rng) const;
+
+ private:
+  struct Piece {
+    uint32_t level;
+    uint32_t index;  // into levels[level].walkable
+    double lo_x, lo_z, hi_x, hi_z;
+  };
+  bool insidePiece(const Piece& p, double x, double z) const;
+  bool wallBlocks(uint32_t fragment, const glm::dvec3& a, const glm::dvec3& b, double radius) const;
+  bool blocks(int32_t node, const glm::dvec3& a, const glm::dvec3& b, double radius, glm::dvec3* blocker) const;
+
+  const Scene& scene_;
+  const BspTree& bsp_;
+  double radius_ = 0.0, step_ = 0.0;
+  double tol_ = 0.0;  // 1e-9 of the scene's scale
+  std::vector<Piece> pieces_;
+  std::vector<double> piece_area_cumulative_;
+  // Uniform grid over the pieces' bounds: cell → piece indices.
+  double grid_x0_ = 0.0, grid_z0_ = 0.0, cell_ = 1.0;
+  int grid_nx_ = 0, grid_nz_ = 0;
+  std::vector<uint32_t> cell_start_, cell_pieces_;
+};
+
+}  // namespace walkvis

@@ -16,35 +16,10 @@
 #include "walkthrough/frame.h"
 #include "walkthrough/osmesa_context.h"
 #include "walkthrough/scene_drawer.h"
+#include "frame_test_util.h"
 
 namespace walkvis {
 namespace {
-
-constexpr int kW = 160, kH = 120;
-
-struct Offscreen {
-  OsMesaContext context;
-  SceneDrawer drawer;
-};
-
-Offscreen makeOffscreen() {
-  std::string why;
-  auto context = OsMesaContext::create(kW, kH, 24, &why);
-  if (!context) throw std::runtime_error("no OSMesa context: " + why);
-  auto drawer = SceneDrawer::create(OsMesaContext::loader(), &why);
-  if (!drawer) throw std::runtime_error("no drawer: " + why);
-  return {std::move(*context), std::move(*drawer)};
-}
-
-const World& office() {
-  static const World world = [] {
-    WorldOptions options;
-    options.build_pfd = true;
-    options.cull = ListCullMethod::kRegion;
-    return openWorld("gen:office", options);
-  }();
-  return world;
-}
 
 // Random eyes on the lowest level's height plane inside its walkable region, random yaw.
 std::vector<FreeCamera> officeCameras(const World& world, int count, uint64_t seed) {

@@ -14,35 +14,10 @@
 #include "walkthrough/mesh_object.h"
 #include "walkthrough/osmesa_context.h"
 #include "walkthrough/scene_drawer.h"
+#include "frame_test_util.h"
 
 namespace walkvis {
 namespace {
-
-constexpr int kW = 160, kH = 120;
-
-struct Offscreen {
-  OsMesaContext context;
-  SceneDrawer drawer;
-};
-
-Offscreen makeOffscreen() {
-  std::string why;
-  auto context = OsMesaContext::create(kW, kH, 24, &why);
-  if (!context) throw std::runtime_error("no OSMesa context: " + why);
-  auto drawer = SceneDrawer::create(OsMesaContext::loader(), &why);
-  if (!drawer) throw std::runtime_error("no drawer: " + why);
-  return {std::move(*context), std::move(*drawer)};
-}
-
-const World& office() {
-  static const World world = [] {
-    WorldOptions options;
-    options.build_pfd = true;
-    options.cull = ListCullMethod::kRegion;
-    return openWorld("gen:office", options);  // objects: auto, the blob
-  }();
-  return world;
-}
 
 bool isObject(const World& world, uint32_t id) {
   return id != kNoFragment && id >= world.trees.bsp.fragments.size();

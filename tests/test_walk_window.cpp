@@ -92,7 +92,12 @@ void compareModes(const fs::path& dir, const std::string& mode, uint32_t frames,
   ASSERT_EQ(run(kBinary + " render " + quote(kScene) + common + " --out " + offscreen.string() + " >/dev/null 2>&1"),
             0);
   // The window is bounded by a timeout: it must close by itself at the end of the path.
-  const std::string walk = "timeout 120 xvfb-run -a -s '-screen 0 1024x768x24' " + kBinary + " walk " +
+  // In the sanitizer build, leak checking is off for the windowed process only: Mesa's GLX driver
+  // is dlclose()d before LeakSanitizer runs, so its leftovers show as "<unknown module>" and no
+  // suppression can name them. The same frame and drawing code is leak-checked under OSMesa in
+  // test_frame and test_mesh_object.
+  const std::string leak_env = std::getenv("WALKVIS_SANITIZER_BUILD") ? "ASAN_OPTIONS=detect_leaks=0 " : "";
+  const std::string walk = leak_env + "timeout 120 xvfb-run -a -s '-screen 0 1024x768x24' " + kBinary + " walk " +
                            quote(kScene) + common + " --quit-at-end --screenshot-dir " + window.string() +
                            " --record " + record + " > " + (dir / "walk.log").string() + " 2>&1";
   ASSERT_EQ(run(walk), 0) << "see " << (dir / "walk.log");

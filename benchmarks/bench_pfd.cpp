@@ -39,41 +39,6 @@ struct BenchLevel {
   std::vector<const PfdTree*> walk_trees;
 };
 
-glm::dvec3 sampleLevel(const PfdLevel& level, uint64_t& state) {
-  double total = 0.0;
-  for (const PfdTree& t : level.cells) total += t.region.empty() ? 0.0 : t.stats.region_area;
-  state = state * 6364136223846793005ull + 1442695040888963407ull;
-  double pick = static_cast<double>(state >> 11) * 0x1.0p-53 * total;
-  size_t c = 0, last = 0;
-  for (; c < level.cells.size(); ++c) {
-    const double a = level.cells[c].region.empty() ? 0.0 : level.cells[c].stats.region_area;
-    if (!(a > 0.0)) continue;
-    last = c;
-    if (pick < a) break;
-    pick -= a;
-  }
-  if (c == level.cells.size()) c = last;
-  const glm::dvec2 p = samplePfdRegion(level.cells[c], state);
-  return {p.x, level.height, p.y};
-}
-
-// Strictly inside one of the tree's convex region pieces (either winding), in doubles: a step
-// between two eyes of a non-convex walkable region may leave it (into a wall), where the tree's
-// order is not defined.
-bool insideRegion(const PfdTree& tree, const glm::dvec3& eye) {
-  for (const auto& ring : tree.region) {
-    size_t pos = 0, neg = 0;
-    for (size_t i = 0; i < ring.size(); ++i) {
-      const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
-      const double c = (b.x - a.x) * (eye.z - a.y) - (b.y - a.y) * (eye.x - a.x);
-      pos += c > 0;
-      neg += c < 0;
-    }
-    if (pos == ring.size() || neg == ring.size()) return true;
-  }
-  return false;
-}
-
 std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& level_choice, uint32_t eye_count) {
   auto b = std::make_shared<BenchLevel>();
   const Scene scene = loadScene(spec);
@@ -93,7 +58,7 @@ std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& 
   b->level = buildPfdLevel(b->bsp, scene.levels[li], static_cast<uint32_t>(li), scene.eye_height, options, used);
   uint64_t state = 42;
   while (b->eyes.size() < eye_count) {
-    const glm::dvec3 e = sampleLevel(b->level, state);
+    const glm::dvec3 e = samplePfdLevel(b->level, state).value();
     if (const PfdTree* t = findPfdCell(b->level, e)) {
       b->eyes.push_back(e);
       b->trees.push_back(t);
@@ -107,7 +72,7 @@ std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& 
     for (int s = 1; s <= 200 && b->walk.size() < eye_count; ++s) {
       const glm::dvec3 p = at + (to - at) * (s / 200.0);
       const PfdTree* t = findPfdCell(b->level, p);
-      if (!t || !insideRegion(*t, p)) break;
+      if (!t || !strictlyInsidePfdRegion(*t, p)) break;
       b->walk.push_back(p);
       b->walk_trees.push_back(t);
     }

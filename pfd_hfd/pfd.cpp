@@ -2,6 +2,7 @@
 // removal", Computer Graphics Forum 17(1), 1998; DESIGN.md, "PFD tree"): a root-to-leaf walk
 // that appends each node's runs; the frame-coherent form keeps the prefix of the order that the
 // eye's move did not change (Kumar et al. 1996 track the view point the same way).
+#include <algorithm>
 #include <cmath>
 
 #include "pfd_hfd/pfd.h"
@@ -50,14 +51,17 @@ PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<
   return result;
 }
 
-PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs) {
-  runs.clear();
+namespace {
+
+// The root-to-leaf walk shared by the run queries: emit(run index) for each node's list in order.
+template <typename Emit>
+PfdQueryResult walkRuns(const PfdTree& tree, const glm::dvec3& eye, Emit&& emit) {
   PfdQueryResult result;
   if (tree.nodes.empty()) return result;
   uint32_t i = 0;
   for (;;) {
     const PfdNode& node = tree.nodes[i];
-    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) runs.push_back(tree.runs[tree.run_refs[r]]);
+    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) emit(tree.run_refs[r]);
     if (node.front < 0) break;
     const int s = planeSide(tree.planes[node.plane], eye);
     ++result.tests;
@@ -65,6 +69,18 @@ PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vec
     i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
   }
   return result;
+}
+
+}  // namespace
+
+PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs) {
+  runs.clear();
+  return walkRuns(tree, eye, [&](uint32_t run) { runs.push_back(tree.runs[run]); });
+}
+
+PfdQueryResult pfdQueryRunIds(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& run_ids) {
+  run_ids.clear();
+  return walkRuns(tree, eye, [&](uint32_t run) { run_ids.push_back(run); });
 }
 
 PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdCursor& cursor,
@@ -169,6 +185,38 @@ const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye) {
     if (eye.x >= t.cell->lo.x && eye.x < t.cell->hi.x && eye.z >= t.cell->lo.y && eye.z < t.cell->hi.y) return &t;
   }
   return nullptr;
+}
+
+std::optional<glm::dvec3> samplePfdLevel(const PfdLevel& level, uint64_t& rng_state) {
+  double total = 0.0;
+  for (const PfdTree& t : level.cells) total += std::max(t.stats.region_area, 0.0);
+  if (!(total > 0.0)) return std::nullopt;
+  double pick = uniform(rng_state) * total;
+  size_t c = 0, last = 0;
+  for (; c < level.cells.size(); ++c) {
+    const double a = level.cells[c].stats.region_area;
+    if (!(a > 0.0)) continue;
+    last = c;
+    if (pick < a) break;
+    pick -= a;
+  }
+  if (c == level.cells.size()) c = last;  // rounding left a sliver of `pick`
+  const glm::dvec2 p = samplePfdRegion(level.cells[c], rng_state);
+  return glm::dvec3{p.x, level.height, p.y};
+}
+
+bool strictlyInsidePfdRegion(const PfdTree& tree, const glm::dvec3& eye) {
+  for (const auto& ring : tree.region) {
+    size_t pos = 0, neg = 0;
+    for (size_t i = 0; i < ring.size(); ++i) {
+      const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
+      const double c = (b.x - a.x) * (eye.z - a.y) - (b.y - a.y) * (eye.x - a.x);
+      pos += c > 0;
+      neg += c < 0;
+    }
+    if (pos == ring.size() || neg == ring.size()) return true;
+  }
+  return false;
 }
 
 }  // namespace walkvis

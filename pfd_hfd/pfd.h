@@ -149,6 +149,9 @@ PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<
 // The same walk, appending the runs to draw (ranges of tree.fragment_ids, in order) instead of
 // copying the ids: what a renderer that keeps per-fragment draw ranges needs.
 PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs);
+// The same walk, appending run indices (into tree.runs) instead: for per-run structures such as
+// the backface list cullers (backface/list_cull.h), which are built over tree.runs in order.
+PfdQueryResult pfdQueryRunIds(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& run_ids);
 
 // Frame coherence: the path of the last query and where each node's list starts in `order`.
 // A query re-tests the path from the root and re-walks only from the first test whose side
@@ -195,6 +198,15 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
 // half-open boxes [lo, hi)).
 const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye);
 
+// A uniformly random eye of the level (a cell by region area, then a point of its region) at the
+// level's height, or nullopt when the level has no region area.
+std::optional<glm::dvec3> samplePfdLevel(const PfdLevel& level, uint64_t& rng_state);
+
+// True when (eye.x, eye.z) lies strictly inside one of the tree's convex region pieces (either
+// winding), judged in doubles: for tests and benchmarks that step an eye and must stay where the
+// tree's order is defined (a step across a non-convex walkable region may enter a wall).
+bool strictlyInsidePfdRegion(const PfdTree& tree, const glm::dvec3& eye);
+
 struct TreeFile {
   TreeKind kind = TreeKind::kPfd;
   VisibilityOptions visibility;  // kHfd: the sampling the trees were built with
@@ -209,6 +221,9 @@ void saveTreeFile(const TreeFile& file, const std::string& path);
 // SceneError naming the path for a missing file, wrong magic or version, checksum mismatch,
 // truncation or any index out of range; never allocates more than the file's size implies.
 TreeFile loadTreeFile(const std::string& path);
+// True when the file at `path` starts with the tree file's magic (false when it cannot be read):
+// how commands tell a tree file from a scene argument.
+bool isTreeFile(const std::string& path);
 TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::string& context);
 
 }  // namespace walkvis

@@ -291,6 +291,12 @@ TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::strin
   return file;
 }
 
+bool isTreeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[sizeof kMagic] = {};
+  return in.read(head, sizeof head) && std::memcmp(head, kMagic, sizeof kMagic) == 0;
+}
+
 TreeFile loadTreeFile(const std::string& path) {
   const std::vector<uint8_t> bytes = readFileBytes(path);
   return loadTreeFileFromMemory(bytes, path);

@@ -25,42 +25,6 @@ struct PropertyResult {
   double tests = 0.0;
 };
 
-// Area-weighted cell, then a uniform point of its region.
-glm::dvec3 sampleLevel(const PfdLevel& level, uint64_t& state) {
-  double total = 0.0;
-  for (const PfdTree& t : level.cells) total += t.region.empty() ? 0.0 : t.stats.region_area;
-  state = state * 6364136223846793005ull + 1442695040888963407ull;
-  double pick = static_cast<double>(state >> 11) * 0x1.0p-53 * total;
-  size_t c = 0, last = 0;
-  for (; c < level.cells.size(); ++c) {
-    const double a = level.cells[c].region.empty() ? 0.0 : level.cells[c].stats.region_area;
-    if (!(a > 0.0)) continue;
-    last = c;
-    if (pick < a) break;
-    pick -= a;
-  }
-  if (c == level.cells.size()) c = last;
-  const glm::dvec2 p = samplePfdRegion(level.cells[c], state);
-  return {p.x, level.height, p.y};
-}
-
-// Strictly inside one of the tree's convex region pieces (either winding), in doubles: a step
-// between two eyes of a non-convex walkable region may leave it (into a wall), where the tree's
-// order is not defined.
-bool insideRegion(const PfdTree& tree, const glm::dvec3& eye) {
-  for (const auto& ring : tree.region) {
-    size_t pos = 0, neg = 0;
-    for (size_t i = 0; i < ring.size(); ++i) {
-      const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
-      const double c = (b.x - a.x) * (eye.z - a.y) - (b.y - a.y) * (eye.x - a.x);
-      pos += c > 0;
-      neg += c < 0;
-    }
-    if (pos == ring.size() || neg == ring.size()) return true;
-  }
-  return false;
-}
-
 PropertyResult checkLevel(const BspTree& bsp, const PfdLevel& level, uint32_t eyes, uint64_t seed) {
   PropertyResult r;
   if (level.cells.empty()) return r;
@@ -69,15 +33,15 @@ PropertyResult checkLevel(const BspTree& bsp, const PfdLevel& level, uint32_t ey
   std::vector<PfdRun> runs;
   PfdCursor cursor;
   const PfdTree* cursor_tree = nullptr;
-  glm::dvec3 prev = sampleLevel(level, state);
+  glm::dvec3 prev = samplePfdLevel(level, state).value();
   for (uint32_t e = 0; e < eyes; ++e) {
-    glm::dvec3 eye = sampleLevel(level, state);
+    glm::dvec3 eye = samplePfdLevel(level, state).value();
     // Every other eye is a small step from the last one (when it stays in the same cell), so the
     // coherent query re-walks only part of its path.
     if (e % 2 == 1) {
       const glm::dvec3 step = prev + 0.01 * (eye - prev);
       const PfdTree* a = findPfdCell(level, prev);
-      if (a && a == findPfdCell(level, step) && insideRegion(*a, step)) eye = step;
+      if (a && a == findPfdCell(level, step) && strictlyInsidePfdRegion(*a, step)) eye = step;
     }
     prev = eye;
     const PfdTree* tree = findPfdCell(level, eye);

@@ -15,17 +15,6 @@
 namespace walkvis {
 namespace {
 
-// pfd_io.cpp's magic: a tree file is told from a scene spec by its first bytes.
-constexpr char kTreeMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
-
-bool isTreeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  char head[8] = {};
-  in.read(head, 8);
-  return in.gcount() == 8 && std::memcmp(head, kTreeMagic, 8) == 0;
-}
-
 bool isRunTimeMethod(ListCullMethod m) {
   return m == ListCullMethod::kPolygon || m == ListCullMethod::kMask || m == ListCullMethod::kCluster ||
          m == ListCullMethod::kHierarchy;
@@ -188,18 +177,8 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
         // The tree answers for eyes ON its height plane: snap the few ulps a path file may add.
         const glm::dvec3 eye(camera.eye.x, pl.height, camera.eye.z);
         if (const PfdTree* tree = findPfdCell(pl, eye); tree && !tree->nodes.empty()) {
-          // pfdQueryRuns' walk, keeping run indices: the list cullers are per run.
-          run_indices_.clear();
-          uint32_t i = 0;
-          for (;;) {
-            const PfdNode& node = tree->nodes[i];
-            for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r)
-              run_indices_.push_back(tree->run_refs[r]);
-            if (node.front < 0) break;
-            const int s = planeSide(tree->planes[node.plane], eye);
-            ++stats.tests;
-            i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
-          }
+          // Run indices, not runs: the list cullers are per run.
+          stats.tests = pfdQueryRunIds(*tree, eye, run_indices_).tests;
           const ListCuller* culler = nullptr;
           if (*level < world.run_cullers.size()) {
             const size_t cell = static_cast<size_t>(tree - pl.cells.data());

@@ -77,13 +77,6 @@ HfdSummary summarise(std::span<const HfdEyeStats> eyes, uint64_t fragments) {
   return s;
 }
 
-uint64_t splitmix(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
 }  // namespace
 
 HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
@@ -111,22 +104,14 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
   uint64_t rng = options.seed ^ 0x5DEECE66Dull;
   for (size_t li = 0; li < file.levels.size(); ++li) {
     const PfdLevel& level = file.levels[li];
-    std::vector<double> cum;
-    double total = 0.0;
-    for (const PfdTree& t : level.cells) cum.push_back(total += std::max(t.stats.region_area, 0.0));
-    if (level.cells.empty() || !(total > 0.0)) continue;
     const size_t first_eye = out.eyes.size();
     for (uint32_t k = 0; k < options.views; ++k) {
-      const double pick = static_cast<double>(splitmix(rng) >> 11) * 0x1.0p-53 * total;
-      size_t c = std::lower_bound(cum.begin(), cum.end(), pick) - cum.begin();
-      c = std::min(c, cum.size() - 1);
-      const PfdTree& cell = level.cells[c];
-      const glm::dvec2 p = samplePfdRegion(cell, rng);
-      const glm::dvec3 eye(p.x, cell.height, p.y);
-      // The tree the walkthrough would use there (cells are half-open; a sample on a shared cell
-      // side belongs to the neighbour).
+      const std::optional<glm::dvec3> sampled = samplePfdLevel(level, rng);
+      if (!sampled) break;  // no region area on this level
+      const glm::dvec3 eye = *sampled;
+      // The tree the walkthrough would use there (cells are half-open boxes covering the region).
       const PfdTree* tree = findPfdCell(level, eye);
-      if (!tree) tree = &cell;
+      if (!tree) continue;  // exactly on the outer upper side of the cells: no tree holds it
       HfdEyeStats e;
       e.level = level.level;
       e.eye = eye;

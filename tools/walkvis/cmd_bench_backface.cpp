@@ -41,7 +41,6 @@
 #include <memory>
 #include <random>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -361,15 +360,10 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
 
   // Ranges per tree (its runs) and, per eye, the ranges its query yields.
   std::vector<std::vector<IndexRange>> ranges(trees.cells.size());
-  std::vector<std::unordered_map<uint64_t, uint32_t>> run_index(trees.cells.size());
-  double area = 0.0;
   uint64_t pool = 0;
   for (size_t t = 0; t < trees.cells.size(); ++t) {
-    for (const PfdRun& run : trees.cells[t].runs) {
-      run_index[t].emplace((uint64_t{run.first} << 32) | run.count, static_cast<uint32_t>(ranges[t].size()));
-      ranges[t].push_back({run.first, run.count});
-    }
-    area += trees.cells[t].stats.region_area;
+    // Range r is run r of the tree, so a query's run indices are range indices.
+    for (const PfdRun& run : trees.cells[t].runs) ranges[t].push_back({run.first, run.count});
     pool += trees.cells[t].fragment_ids.size();
   }
   struct Eye {
@@ -381,25 +375,22 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
   uint64_t rng_state = args.seed;
   std::mt19937_64 rng(args.seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<PfdRun> runs;
   uint64_t listed = 0, back_total = 0;
-  for (int e = 0; e < args.eyes && area > 0.0; ++e) {
-    double pick = u(rng) * area;
-    size_t t = 0;
-    while (t + 1 < trees.cells.size() && pick > trees.cells[t].stats.region_area) pick -= trees.cells[t++].stats.region_area;
-    const PfdTree& tree = trees.cells[t];
-    const glm::dvec2 p = samplePfdRegion(tree, rng_state);
+  for (int e = 0; e < args.eyes; ++e) {
+    const std::optional<glm::dvec3> at = samplePfdLevel(trees, rng_state);
+    if (!at) break;  // the level has no region area
+    const PfdTree* found = findPfdCell(trees, *at);
+    if (!found) continue;  // exactly on the outer upper side of the cells
+    const PfdTree& tree = *found;
     Eye eye;
-    eye.tree = static_cast<uint32_t>(t);
-    eye.view.eye = glm::dvec3(p.x, tree.height, p.y);
+    eye.tree = static_cast<uint32_t>(found - trees.cells.data());
+    eye.view.eye = *at;
     const double yaw = 2.0 * M_PI * u(rng);
     eye.view.view_dir = glm::dvec3(std::cos(yaw), 0.0, std::sin(yaw));
     eye.view.fov = M_PI / 3.0;
-    pfdQueryRuns(tree, eye.view.eye, runs);
-    for (const PfdRun& run : runs) {
-      const auto it = run_index[t].find((uint64_t{run.first} << 32) | run.count);
-      if (it == run_index[t].end()) throw SceneError(spec + ": a query yielded a run the tree does not hold");
-      eye.ranges.push_back(it->second);
+    pfdQueryRunIds(tree, eye.view.eye, eye.ranges);
+    for (uint32_t r : eye.ranges) {
+      const PfdRun& run = tree.runs[r];
       listed += run.count;
       for (uint32_t k = 0; k < run.count; ++k) {
         back_total += !isFrontFacing(bsp.fragments[tree.fragment_ids[run.first + k]].plane, eye.view.eye);

@@ -61,16 +61,6 @@ nlohmann::ordered_json countsJson(const PixelCounts& c) {
           {"uncovered_pixels", c.uncovered}};
 }
 
-const char* kindName(TreeKind kind) { return kind == TreeKind::kHfd ? "hfd" : "pfd"; }
-
-// A tree file starts with the magic of pfd_io.cpp; anything else is a scene argument.
-bool isTreeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[8] = {};
-  if (!in.read(magic, sizeof magic)) return false;
-  return std::memcmp(magic, "WVPFD\r\n\x1a", 8) == 0;
-}
-
 // What runValidation needs of a scene, from a tree file: the fragments (bounds, face ids for the
 // colours) and one level per tree level whose walkable region is the union of its cells' regions,
 // so eyes land at floor_y + eye_height = the trees' height plane.
@@ -125,7 +115,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
   const bool hfd = file.kind == TreeKind::kHfd;
   nlohmann::ordered_json j;
   j["file"] = path;
-  j["order"] = kindName(file.kind);
+  j["order"] = treeKindName(file.kind);
   j["fragments"] = file.bsp.fragments.size();
   j["eyes_per_level"] = args.compare_bsp;
   j["seed"] = args.seed;
@@ -138,12 +128,8 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
   const auto t0 = Clock::now();
   for (size_t l = 0; l < file.levels.size(); ++l) {
     const PfdLevel& level = file.levels[l];
-    std::vector<double> area;
     double area_sum = 0.0;
-    for (const PfdTree& t : level.cells) {
-      area.push_back(t.region.empty() ? 0.0 : t.stats.region_area);
-      area_sum += area.back();
-    }
+    for (const PfdTree& t : level.cells) area_sum += std::max(t.stats.region_area, 0.0);
     nlohmann::ordered_json lj;
     lj["level"] = level.level;
     lj["height"] = level.height;
@@ -158,18 +144,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
     uint64_t compared = 0, mismatch = 0, coherent_mismatch = 0, on_line = 0, no_cell = 0, tests_max = 0;
     double tests = 0.0, listed = 0.0, bsp_listed = 0.0;
     for (uint32_t e = 0; e < args.compare_bsp; ++e) {
-      // A cell by area (splitmix-style draw from the same state), then a point of its region.
-      state += 0x9E3779B97F4A7C15ull;
-      uint64_t z = state;
-      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-      z ^= z >> 31;
-      double pick = static_cast<double>(z >> 11) * 0x1.0p-53 * area_sum;
-      size_t c = 0;
-      while (c + 1 < area.size() && pick >= area[c]) pick -= area[c++];
-      while (area[c] <= 0.0) c = (c + 1) % area.size();
-      const glm::dvec2 p = samplePfdRegion(level.cells[c], state);
-      const glm::dvec3 eye{p.x, level.height, p.y};
+      const glm::dvec3 eye = *samplePfdLevel(level, state);  // area_sum > 0 was checked above
       const PfdTree* tree = findPfdCell(level, eye);
       if (!tree) {
         ++no_cell;
@@ -245,7 +220,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
   if (args.json) {
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("file                %s (%s trees, %zu BSP fragments, %zu levels)\n", path.c_str(), kindName(file.kind),
+    std::printf("file                %s (%s trees, %zu BSP fragments, %zu levels)\n", path.c_str(), treeKindName(file.kind),
                 file.bsp.fragments.size(), file.levels.size());
     std::printf("check               tree order %s at %u random eyes per level\n",
                 hfd ? "is a subsequence of the BSP order" : "equals the BSP order", args.compare_bsp);
@@ -274,8 +249,8 @@ int runValidate(const ValidateArgs& args) {
     if (args.scene.eye_height >= 0.0 && args.scene.eye_height != file->eye_height)
       throw SceneError(args.scene.scene + ": the trees were built for eye height " + std::to_string(file->eye_height) +
                        "; rebuild them for --eye-height " + std::to_string(args.scene.eye_height));
-    if (args.order != "bsp" && args.order != kindName(file->kind))
-      throw SceneError(args.scene.scene + ": holds " + kindName(file->kind) + " trees, not " + args.order +
+    if (args.order != "bsp" && args.order != treeKindName(file->kind))
+      throw SceneError(args.scene.scene + ": holds " + std::string(treeKindName(file->kind)) + " trees, not " + args.order +
                        " (walkvis build --tree " + args.order + ")");
     scene = sceneOfTreeFile(*file, args.scene.scene);
   } else {
@@ -336,7 +311,7 @@ int runValidate(const ValidateArgs& args) {
   nlohmann::ordered_json j;
   j["scene"] = scene.name;
   j["order"] = args.order;
-  if (file) j["tree_kind"] = kindName(file->kind);
+  if (file) j["tree_kind"] = treeKindName(file->kind);
   j["polygons"] = file ? tree.stats.input_polygons : scene.polygons.size();
   j["fragments"] = tree.fragments.size();
   j["nonconvex_fragments"] = r.nonconvex_polygons;
@@ -398,7 +373,7 @@ int runValidate(const ValidateArgs& args) {
   } else {
     auto pct = [&](uint64_t n) { return r.pixels ? 100.0 * static_cast<double>(n) / static_cast<double>(r.pixels) : 0.0; };
     std::printf("scene               %s (%s, %zu BSP fragments)\n", scene.name.c_str(),
-                file ? (std::string(kindName(file->kind)) + " tree file").c_str()
+                file ? (std::string(treeKindName(file->kind)) + " tree file").c_str()
                      : (std::to_string(scene.polygons.size()) + " polygons").c_str(),
                 tree.fragments.size());
     if (r.nonconvex_polygons > 0)

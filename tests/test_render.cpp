@@ -253,6 +253,24 @@ TEST(Classify, Cases) {
   EXPECT_EQ(classifyPixel(4, grazing), PixelClass::kOrderError);
 }
 
+// freedoom2 MAP18's BSP has a fragment whose split points rounded onto its first vertex, so its fan
+// starts with zero-area triangles. Those cover nothing (a rasteriser draws nothing for them); the
+// exact test once counted every point of the plane as inside them, which made a false order error.
+TEST(RayCast, ZeroAreaFanTrianglesCoverNothing) {
+  const Plane floor{{0.0, 1.0, 0.0}, 208.0};
+  const std::vector<glm::dvec3> sliver{{592, 208, -1328}, {592, 208, -1328}, {592, 208, -1328},
+                                       {587.72752043596734, 208, -1270.3215258855587}, {624, 208, -1248}};
+  const glm::dvec3 eye{525.0818304334783, 249.0, -1286.4630586834583};
+  // Inside the real triangle, 2e-4 units from its edge: a hit.
+  EXPECT_TRUE(exactPolygonHit(sliver, floor, eye, {1.0, -0.41796875, 0.37109375}, 0.1, 1e4).has_value());
+  // Outside it (to the side of the edge towards +z and far away): no hit, whatever the fan's
+  // zero-area triangles would say.
+  EXPECT_FALSE(exactPolygonHit(sliver, floor, eye, {1.0, -0.41796875, 0.40}, 0.1, 1e4).has_value());
+  EXPECT_FALSE(exactPolygonHit(sliver, floor, eye, {1.0, -0.2, -0.9}, 0.1, 1e4).has_value());
+  const std::vector<glm::dvec3> point{{1, 0, 1}, {1, 0, 1}, {1, 0, 1}};
+  EXPECT_FALSE(exactPolygonHit(point, {{0.0, 1.0, 0.0}, 0.0}, {0, 5, 0}, {0.0, -1.0, 0.0}, 0.1, 1e4).has_value());
+}
+
 TEST(ZBuffer, SixteenBitsLoseToThirtyTwoOnNearCoplanarDistantSurfaces) {
   // Two large walls 100 units away, 0.02 apart, the nearer one in front: a 16-bit depth buffer
   // with near = 0.085 cannot separate them; 32 bits can.

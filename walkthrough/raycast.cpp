@@ -60,6 +60,9 @@ std::optional<double> exactPolygonHit(std::span<const glm::dvec3> verts, const P
   // it agrees with them even for a polygon that breaks the convexity contract (for a convex
   // polygon it is the plain convex test): a fan triangle counts when the point is on the inner side
   // of its three edges, seen from the front, as a rasteriser draws only counter-clockwise ones.
+  // A fan triangle of zero area (repeated vertices, e.g. split points that rounded onto each other)
+  // is skipped: a rasteriser draws nothing for it, while its zero-length edges would pass the edge
+  // test for every point of the plane.
   const glm::dvec3 x = t * dir;
   const glm::dvec3 a = verts[0] - eye;
   auto inner = [&](const glm::dvec3& p, const glm::dvec3& q) {
@@ -68,6 +71,7 @@ std::optional<double> exactPolygonHit(std::span<const glm::dvec3> verts, const P
   bool inside = false;
   for (size_t k = 1; k + 1 < verts.size() && !inside; ++k) {
     const glm::dvec3 b = verts[k] - eye, c = verts[k + 1] - eye;
+    if (!(glm::dot(plane.n, glm::cross(b - a, c - a)) > 0.0)) continue;
     inside = inner(a, b) && inner(b, c) && inner(c, a);
   }
   if (!inside) return std::nullopt;

@@ -470,6 +470,66 @@ TEST(Bsp, StatisticsAndHeuristicBeatsRandomOnWalls) {
   EXPECT_LT(s.ratio, random_ratio);
 }
 
+// Walls standing on one floor that spans them all: every wall plane crosses the floor, the
+// floor's plane crosses nothing (walls touch it with their bottom edges). With free_first the
+// root must be the floor's plane, in both exact modes (lookahead for <= 128 fragments, full
+// count above); the tree stays deterministic for its options.
+TEST(Bsp, FreePlaneIsTakenFirst) {
+  for (int walls : {60, 300}) {
+    Scene scene = wallScene(11, walls);
+    const std::vector<glm::dvec3> floor = {{-10, 0, -10}, {-10, 0, 140}, {140, 0, 140}, {140, 0, -10}};
+    addFace(scene, floor, kColor, "test");
+    ASSERT_EQ(scene.polygons.size(), static_cast<size_t>(walls) + 1);
+    const uint32_t floor_poly = static_cast<uint32_t>(walls);
+    for (bool free_first : {true, false}) {
+      BspOptions options;
+      options.free_first = free_first;
+      const BspTree tree = buildBsp(scene, options);
+      const Plane& root = tree.nodes[tree.root].plane;
+      const bool root_is_floor = root.n.x == 0.0 && root.n.z == 0.0 && root.d == 0.0;
+      if (free_first) {
+        EXPECT_TRUE(root_is_floor) << walls << " walls: root plane from polygon " << tree.nodes[tree.root].polygon;
+        EXPECT_EQ(tree.nodes[tree.root].polygon, floor_poly);
+      }
+      // Whatever the root, the result is exact and complete, and the same on a rebuild.
+      const BspTree again = buildBsp(scene, options);
+      ASSERT_EQ(again.fragments.size(), tree.fragments.size());
+      ASSERT_EQ(again.nodes.size(), tree.nodes.size());
+      for (size_t i = 0; i < tree.nodes.size(); ++i) EXPECT_EQ(again.nodes[i].polygon, tree.nodes[i].polygon);
+      std::vector<uint32_t> order;
+      backToFront(tree, glm::dvec3(50.5, 1.5, 50.5), order);
+      expectPermutation(order, tree.fragments.size());
+      std::printf("%d walls + floor, free_first %d: N/n %.3f, root polygon %u\n", walls, free_first ? 1 : 0,
+                  tree.stats.ratio, tree.nodes[tree.root].polygon);
+    }
+  }
+}
+
+// Full counting (every distinct plane on the whole set) uses no random choice: where it covers
+// every node bigger than lookahead_max the tree does not depend on the seed, while sampling does.
+// Both stay exact and complete.
+TEST(Bsp, FullCountIsSeedIndependent) {
+  const Scene scene = wallScene(7, 400);
+  for (uint64_t full_count_max : {uint64_t{64'000'000}, uint64_t{0}}) {
+    BspOptions a;
+    a.full_count_max = full_count_max;
+    a.lookahead_max = 0;
+    BspOptions b = a;
+    b.seed = 2;
+    const BspTree ta = buildBsp(scene, a), tb = buildBsp(scene, b);
+    bool same = ta.nodes.size() == tb.nodes.size();
+    for (size_t i = 0; same && i < ta.nodes.size(); ++i) same = ta.nodes[i].polygon == tb.nodes[i].polygon;
+    std::printf("walls: full_count_max %llu: N/n %.3f (seed 1), %.3f (seed 2)\n",
+                static_cast<unsigned long long>(full_count_max), ta.stats.ratio, tb.stats.ratio);
+    EXPECT_EQ(same, full_count_max != 0);
+    for (const BspTree* t : {&ta, &tb}) {
+      std::vector<uint32_t> order;
+      backToFront(*t, glm::dvec3(33.3, 1.5, 66.6), order);
+      expectPermutation(order, t->fragments.size());
+    }
+  }
+}
+
 TEST(Bsp, EmptySceneAndBadPlanes) {
   Scene empty;
   const BspTree tree = buildBsp(empty);

@@ -41,10 +41,12 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 constexpr const char* kFreedoom2 = "/usr/share/games/doom/freedoom2.wad";
 
 // The default benchmark series: the office at ~1k, ~10k and ~100k polygons and every map of
-// freedoom2.wad when it is installed. Measured counts (seed 1): rooms=32 1,060, rooms=340 8,280,
-// rooms=3400 81,701 polygons, so ~100k is rooms=4200.
+// freedoom2.wad when it is installed. Measured counts (seed 1, `walkvis info`): rooms=32 1,060,
+// rooms=403 9,973, rooms=404 10,015, rooms=405 10,044 (the count is not monotone in rooms:
+// rooms=425 has 10,294, rooms=420 10,369), rooms=4200 100,165 polygons; so ~10k is rooms=404
+// and ~100k is rooms=4200.
 std::vector<std::string> defaultSeries() {
-  std::vector<std::string> scenes = {"gen:office", "gen:office?rooms=340", "gen:office?rooms=4200"};
+  std::vector<std::string> scenes = {"gen:office", "gen:office?rooms=404", "gen:office?rooms=4200"};
   if (std::filesystem::exists(kFreedoom2))
     for (const std::string& map : wadMapNames(kFreedoom2)) scenes.push_back(std::string("freedoom2.wad:") + map);
   return scenes;
@@ -64,6 +66,9 @@ struct BspBenchArgs {
   double split_weight = BspOptions{}.split_weight;
   double coplanar_weight = BspOptions{}.coplanar_weight;
   uint32_t lookahead_max = BspOptions{}.lookahead_max;
+  uint64_t full_count_max = BspOptions{}.full_count_max;
+  bool free_first = BspOptions{}.free_first;
+  double horizontal_weight = BspOptions{}.horizontal_weight;
   bool json = false;
 };
 
@@ -81,6 +86,9 @@ int runBspBench(const BspBenchArgs& args) {
   out["split_weight"] = args.split_weight;
   out["coplanar_weight"] = args.coplanar_weight;
   out["lookahead_max"] = args.lookahead_max;
+  out["full_count_max"] = args.full_count_max;
+  out["free_first"] = args.free_first;
+  out["horizontal_weight"] = args.horizontal_weight;
   auto rows = nlohmann::ordered_json::array();
   if (!args.json)
     std::printf("%-28s %8s %-13s %9s %6s %5s %6s %10s %9s %8s %8s\n", "scene", "n", "heuristic", "N", "N/n", "depth",
@@ -104,7 +112,8 @@ int runBspBench(const BspBenchArgs& args) {
     double ratio_of[2] = {0.0, 0.0};
     for (int h = 0; h < 2; ++h) {
       BspOptions options{heuristics[h], args.candidates, args.seed, args.samples, args.split_weight,
-                         args.coplanar_weight, args.lookahead_max};
+                         args.coplanar_weight, args.lookahead_max, args.full_count_max, args.free_first,
+                         args.horizontal_weight};
       std::vector<double> times, cpu_times;
       std::vector<double> order_times;
       BspStats stats;
@@ -227,6 +236,12 @@ void addBspBench(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--lookahead-max", args->lookahead_max,
                   "Least-crossed: node sets up to this size are scored exactly with one level of lookahead (0 = off)")
       ->check(CLI::Range(0, 100000));
+  sub->add_option("--full-count-max", args->full_count_max,
+                  "Least-crossed: count every distinct plane on the whole set when fragments x planes <= this (0 = off)");
+  sub->add_option("--free-first", args->free_first,
+                  "Least-crossed: take a plane crossing nothing before any other (exact scoring only; true/false)");
+  sub->add_option("--horizontal-weight", args->horizontal_weight,
+                  "Least-crossed: factor on the crossing count of a horizontal plane (exact scoring only)");
   sub->add_flag("--json", args->json, "Print JSON");
   sub->callback([args, &runner] { runner = [args] { return runBspBench(*args); }; });
 }

@@ -24,6 +24,13 @@
 // in that order), so the table reads walk forward through the table.
 #include "backface/normal_mask.h"
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define WALKVIS_MASK_SHUFFLE 1
+#elif defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -57,11 +64,13 @@ NormalMaskGrid::NormalMaskGrid(int n) : n_(n) {
     throw SceneError("backface mask: mask_resolution must be in [1, 18], got " + std::to_string(n_));
   }
   const size_t m = static_cast<size_t>(n_) + 1;
+  stride_ = (m + 3) / 4 * 4;
   for (int face = 0; face < 6; ++face) {
     const int k = face / 2;
     const double sign = face % 2 == 0 ? 1.0 : -1.0;
     const int a = k == 0 ? 1 : 0, b = k == 2 ? 1 : 2;
-    for (auto& axis : corner_[static_cast<size_t>(face)]) axis.resize(m * m);
+    // Rows padded to a multiple of 4 with zero vectors: 0 > limit (>= kCapMargin) never hits.
+    for (auto& axis : corner_[static_cast<size_t>(face)]) axis.assign(m * stride_, 0.0f);
     for (size_t i = 0; i < m; ++i) {
       for (size_t j = 0; j < m; ++j) {
         glm::dvec3 c(0.0);
@@ -69,7 +78,9 @@ NormalMaskGrid::NormalMaskGrid(int n) : n_(n) {
         c[a] = -1.0 + 2.0 * static_cast<double>(i) / n_;
         c[b] = -1.0 + 2.0 * static_cast<double>(j) / n_;
         c /= glm::length(c);
-        for (int x = 0; x < 3; ++x) corner_[static_cast<size_t>(face)][static_cast<size_t>(x)][i * m + j] = static_cast<float>(c[x]);
+        for (int x = 0; x < 3; ++x) {
+          corner_[static_cast<size_t>(face)][static_cast<size_t>(x)][i * stride_ + j] = static_cast<float>(c[x]);
+        }
       }
     }
   }
@@ -96,7 +107,8 @@ uint16_t NormalMaskGrid::cell(const glm::dvec3& n) const {
 // cube face, so all four corners in the cap puts every normal of the cluster in it.
 void NormalMaskGrid::backTable(const glm::dvec3& axis, double sin_theta, Table& table) const {
   std::memset(table.data(), 0, static_cast<size_t>(6 * n_ * n_));
-  table[kNeverCell] = 0;
+  // Ids 6·N² .. 2047 are never given (but kNeverCell); the padding is read by 16-byte loads.
+  std::memset(table.data() + 6 * n_ * n_, 0, table.size() - static_cast<size_t>(6 * n_ * n_));
   const size_t m = static_cast<size_t>(n_) + 1;
   const double limit = sin_theta + kCapMargin;
   if (!(limit < 1.0)) return;  // the cap is empty
@@ -115,14 +127,29 @@ void NormalMaskGrid::backTable(const glm::dvec3& axis, double sin_theta, Table& 
     const float* cz = c[2].data();
     const float ax = static_cast<float>(axis.x), ay = static_cast<float>(axis.y), az = static_cast<float>(axis.z);
     const float lim = static_cast<float>(limit);
-    std::array<uint8_t, (kMaxResolution + 1) * (kMaxResolution + 1)> hit;
-    for (size_t q = 0; q < m * m; ++q) hit[q] = cx[q] * ax + cy[q] * ay + cz[q] * az > lim;  // vectorizes
-    // Rows of corner bits; a cell is in when its four corners are: two shifts and three ANDs per row.
+    // The cap holds the face's four outer corners: it holds the whole face (convex), every cell in.
+    auto inCap = [&](size_t q) { return cx[q] * ax + cy[q] * ay + cz[q] * az > lim; };
+    const size_t last = static_cast<size_t>(n_);
+    if (inCap(0) && inCap(last) && inCap(last * stride_) && inCap(last * stride_ + last)) {
+      std::memset(table.data() + face * n_ * n_, 1, static_cast<size_t>(n_ * n_));
+      continue;
+    }
+    // Rows of corner bits, four corners per SSE compare and MOVMSKPS.
     std::array<uint32_t, kMaxResolution + 1> row{};
     uint32_t any = 0;
     for (size_t i = 0; i < m; ++i) {
       uint32_t bits = 0;
-      for (size_t j = 0; j < m; ++j) bits |= static_cast<uint32_t>(hit[i * m + j]) << j;
+      const size_t r = i * stride_;
+#if defined(__SSE2__)
+      const __m128 vx = _mm_set1_ps(ax), vy = _mm_set1_ps(ay), vz = _mm_set1_ps(az), vl = _mm_set1_ps(lim);
+      for (size_t j = 0; j < stride_; j += 4) {
+        const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(cx + r + j), vx), _mm_mul_ps(_mm_loadu_ps(cy + r + j), vy)),
+                                      _mm_mul_ps(_mm_loadu_ps(cz + r + j), vz));
+        bits |= static_cast<uint32_t>(_mm_movemask_ps(_mm_cmpgt_ps(dot, vl))) << j;
+      }
+#else
+      for (size_t j = 0; j < m; ++j) bits |= static_cast<uint32_t>(inCap(r + j)) << j;
+#endif
       row[i] = bits;
       any |= bits;
     }
@@ -159,6 +186,35 @@ namespace {
 // table per polygon (measured: a fill costs about as much as eight single reads and stores).
 constexpr uint32_t kMinMeanRun = 8;
 
+// Polygons per shuffle block: the 16 lanes of one SSSE3 byte shuffle.
+constexpr uint32_t kBlock = 16;
+
+// A block of kBlock consecutive units whose cluster ids (sorted within the group) lie in
+// [base, base + kBlock): their table entries are one 16-byte load at `base`, shuffled by the
+// per-unit offsets cell − base. Other blocks read the table once per unit.
+struct Block {
+  uint16_t base = 0;
+  bool shuffle = false;
+};
+
+#ifdef WALKVIS_MASK_SHUFFLE
+// out[i] = table[base + offset[i]] for the kBlock units of one block: one load, one PSHUFB.
+// SSSE3 is not in the project's baseline flags: the caller checks the CPU first.
+[[gnu::target("ssse3")]] void shuffleBlock(const uint8_t* table_at_base, const uint8_t* offset, uint8_t* out) {
+  const __m128i entries = _mm_loadu_si128(reinterpret_cast<const __m128i*>(table_at_base));
+  const __m128i lanes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(offset));
+  _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_shuffle_epi8(entries, lanes));
+}
+#endif
+
+bool cpuHasShuffle() {
+#ifdef WALKVIS_MASK_SHUFFLE
+  return __builtin_cpu_supports("ssse3");
+#else
+  return false;
+#endif
+}
+
 struct Run {
   uint32_t begin;  // first unit; the run ends where the next begins (or at its group's end)
   uint16_t cell;
@@ -170,6 +226,7 @@ struct Group {
   double radius = 0.0;  // grown by kMaskSphereGrowth·(|center|∞ + radius) and the plane residuals
   uint32_t run_begin = 0, run_end = 0;  // runs_ of this group when use_runs
   bool use_runs = false;
+  uint32_t block_begin = 0;  // blocks_ of this group (kBlock units each from g.begin) when !use_runs
 };
 
 class NormalMaskCuller final : public BackfaceCuller {
@@ -216,14 +273,34 @@ class NormalMaskCuller final : public BackfaceCuller {
       g.run_end = static_cast<uint32_t>(runs_.size());
     }
     runs_.shrink_to_fit();
+    shuffle_ = cpuHasShuffle();
+    offset_.assign(count, 0);
+    for (Group& g : groups_) {
+      g.block_begin = static_cast<uint32_t>(blocks_.size());
+      if (g.use_runs) continue;
+      for (uint32_t u = g.begin; u < g.end; u += kBlock) {
+        const uint32_t end = std::min(g.end, u + kBlock);
+        Block blk;
+        blk.base = cell_[u];
+        blk.shuffle = shuffle_ && static_cast<uint32_t>(cell_[end - 1]) - cell_[u] < kBlock;
+        if (blk.shuffle) {
+          for (uint32_t v = u; v < end; ++v) offset_[v] = static_cast<uint8_t>(cell_[v] - blk.base);
+          shuffled_units_ += end - u;
+        }
+        blocks_.push_back(blk);
+      }
+    }
   }
 
   BackfaceMethod method() const override { return BackfaceMethod::kMask; }
   size_t stateBytes() const override {
     // A group with runs reads its runs instead of its per-polygon ids.
+    // A shuffled unit reads its 1-byte offset (and its block's 2-byte base) instead of its id.
     size_t ids = 0;
     for (const Group& g : groups_) ids += g.use_runs ? 0 : g.end - g.begin;
-    return ids * sizeof(uint16_t) + runs_.size() * (sizeof(uint32_t) + sizeof(uint16_t)) +
+    ids -= shuffled_units_;
+    return ids * sizeof(uint16_t) + shuffled_units_ * sizeof(uint8_t) + blocks_.size() * sizeof(uint16_t) +
+           runs_.size() * (sizeof(uint32_t) + sizeof(uint16_t)) +
            groups_.size() * (sizeof(glm::dvec3) + sizeof(double));
   }
 
@@ -265,7 +342,25 @@ class NormalMaskCuller final : public BackfaceCuller {
     const uint16_t* cell = cell_.data();
     const uint8_t* t = table.data();
     uint8_t* out = unit_culled.data();
-    for (uint32_t u = g.begin; u < g.end; ++u) out[u] = t[cell[u]];
+    const Block* blk = blocks_.data() + g.block_begin;
+    for (uint32_t u = g.begin; u < g.end; u += kBlock, ++blk) {
+      const uint32_t end = std::min(g.end, u + kBlock);
+#ifdef WALKVIS_MASK_SHUFFLE
+      if (blk->shuffle) {
+        if (end - u == kBlock) {
+          shuffleBlock(t + blk->base, offset_.data() + u, out + u);
+        } else {  // the group's last block: offsets past its end are 0, written to scratch
+          alignas(16) uint8_t tail[kBlock];
+          alignas(16) uint8_t lanes[kBlock] = {};
+          std::memcpy(lanes, offset_.data() + u, end - u);
+          shuffleBlock(t + blk->base, lanes, tail);
+          std::memcpy(out + u, tail, end - u);
+        }
+        continue;
+      }
+#endif
+      for (uint32_t v = u; v < end; ++v) out[v] = t[cell[v]];
+    }
   }
 
   void split(uint32_t begin, uint32_t end, size_t group_size, const std::vector<glm::dvec3>& centroid) {
@@ -318,6 +413,10 @@ class NormalMaskCuller final : public BackfaceCuller {
   std::vector<Group> groups_;
   std::vector<uint16_t> cell_;  // per unit: the 2-byte cluster id of §2.2
   std::vector<Run> runs_;
+  bool shuffle_ = false;           // the CPU has SSSE3 (checked once, at build)
+  std::vector<Block> blocks_;      // per group without runs, per kBlock units
+  std::vector<uint8_t> offset_;    // per unit of a shuffle block: cluster id − block base
+  size_t shuffled_units_ = 0;
 };
 
 }  // namespace

@@ -21,7 +21,10 @@ class NormalMaskGrid {
  public:
   static constexpr int kMaxResolution = 18;  // 6·18² = 1944 clusters <= 2048
   static constexpr uint16_t kNeverCell = 2047;  // a zero or non-finite normal: never culled
-  using Table = std::array<uint8_t, 2048>;
+  // 2048 entries and 16 zero bytes after them, so that 16 entries can be loaded from any cluster id
+  // (normal_mask.cpp reads 16 polygons' entries with one load and one byte shuffle).
+  static constexpr size_t kTablePadding = 16;
+  using Table = std::array<uint8_t, 2048 + kTablePadding>;
 
   // Throws SceneError unless 1 <= n <= kMaxResolution.
   explicit NormalMaskGrid(int n);
@@ -31,13 +34,14 @@ class NormalMaskGrid {
   uint16_t cell(const glm::dvec3& normal) const;
   // §3.1: table[c] = 1 for every cluster c all of whose normals n̂ satisfy n̂·axis > sin_theta (with
   // a margin against rounding), i.e. back-facing for every direction of the cone of half-angle θ
-  // around `axis` (unit length); all other entries 0 (kNeverCell always 0).
+  // around `axis` (unit length); all other entries 0 (kNeverCell and the padding always 0).
   void backTable(const glm::dvec3& axis, double sin_theta, Table& table) const;
 
  private:
   int n_;
+  size_t stride_ = 0;  // floats per row of corners: N + 1 rounded up to a multiple of 4
   // Unit corner directions of each face's (N+1)² grid in single precision (the per-frame test
-  // is 4 corners per SSE operation), structure of arrays: corner_[face][axis].
+  // is 4 corners per SSE operation), structure of arrays: corner_[face][axis][row * stride_ + column].
   std::array<std::array<std::vector<float>, 3>, 6> corner_;
 };
 

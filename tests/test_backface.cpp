@@ -39,6 +39,9 @@ std::vector<MethodSetup> methodSetups() {
   grouped.mask_resolution = 8;
   out.push_back({"mask/groups64/N8", BackfaceMethod::kMask, grouped});
   out.push_back({"cluster", BackfaceMethod::kCluster, {}});
+  BackfaceOptions tree;
+  tree.cluster_hierarchy = true;
+  out.push_back({"cluster/tree", BackfaceMethod::kCluster, tree});
   BackfaceOptions flat;
   flat.cluster_hierarchy = false;
   flat.cluster_tr = 4.0;
@@ -122,6 +125,31 @@ TEST(Backface, SoupNoFrontFaceCulled) { expectConservative(randomSoup(14, 400), 
 
 // Far from the origin with small features: the margins must scale with the coordinates.
 TEST(Backface, FarFromOriginNoFrontFaceCulled) { expectConservative(backface_test::farFromOriginSphere(), 15); }
+
+// The flat cluster pass evaluates in float relative to the model's centre: far from the world
+// origin it still resolves a 0.01-radius sphere (in world floats its ulp there is 0.06).
+TEST(Backface, ClusterFlatCullsFarFromOrigin) {
+  const Scene s = backface_test::farFromOriginSphere();
+  const Frame f = frameOf(s);
+  const auto culler = makeBackfaceCuller(BackfaceMethod::kCluster, backfaceInput(s), {});
+  std::vector<uint8_t> units(culler->unitCount()), culled(s.polygons.size());
+  std::mt19937_64 rng(21);
+  uint64_t culled_total = 0, back_total = 0, false_culls = 0;
+  for (int e = 0; e < 200; ++e) {
+    BackfaceView view;
+    view.eye = f.center + 3.0 * f.radius * randomUnit(rng);
+    culler->cull(view, units);
+    expandToPolygons(*culler, units, culled);
+    for (size_t p = 0; p < s.polygons.size(); ++p) {
+      const bool front = isFrontFacing(s.polygons[p].plane, view.eye);
+      culled_total += culled[p];
+      back_total += !front;
+      false_culls += culled[p] && front;
+    }
+  }
+  EXPECT_EQ(false_culls, 0u);
+  EXPECT_GT(static_cast<double>(culled_total), 0.5 * static_cast<double>(back_total));
+}
 
 TEST(Backface, SphereCullsFromFarAway) { expectEffectiveFarAway(loadScene("gen:sphere")); }
 TEST(Backface, DomeCullsFromFarAway) { expectEffectiveFarAway(loadScene("gen:dome")); }

@@ -54,6 +54,9 @@ std::vector<CullSetup> cullSetups() {
   mixed.mask_group_size = 40;
   mixed.mask_list_min_chunk = 25;  // tables for full chunks, the plane test for most range tails
   out.push_back({"mask/chunks40/min25", ListCullMethod::kMask, mixed});
+  BackfaceOptions tree;
+  tree.cluster_hierarchy = true;
+  out.push_back({"cluster/tree", ListCullMethod::kCluster, tree});
   BackfaceOptions flat;
   flat.cluster_hierarchy = false;
   flat.cluster_tr = 4.0;

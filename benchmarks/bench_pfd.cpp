@@ -6,6 +6,7 @@
 // runs per query (pfdQueryRuns).
 //
 //   bench_pfd [--scenes=gen:office,freedoom2.wad:MAP01] [--level=largest|INDEX] [--eyes=4096]
+//             [--share-min=64 (PfdOptions::share_min; 4294967295: flat runs only)]
 //             [google benchmark flags, e.g. --benchmark_min_time=0.2]
 // The tree is built as `walkvis build` builds it (buildPfdLevel: view cells above 64 MiB); each
 // eye is queried in the cell that holds it (resolved once, before timing, as a walkthrough does
@@ -39,7 +40,8 @@ struct BenchLevel {
   std::vector<const PfdTree*> walk_trees;
 };
 
-std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& level_choice, uint32_t eye_count) {
+std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& level_choice, uint32_t eye_count,
+                                    uint32_t share_min) {
   auto b = std::make_shared<BenchLevel>();
   const Scene scene = loadScene(spec);
   if (scene.levels.empty()) throw SceneError(spec + ": no walkable level");
@@ -54,6 +56,7 @@ std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& 
   b->bsp = buildBsp(scene);
   PfdLevelOptions options;
   options.tree.stat_eyes = 0;
+  options.tree.share_min = share_min;
   uint64_t used = 0;
   b->level = buildPfdLevel(b->bsp, scene.levels[li], static_cast<uint32_t>(li), scene.eye_height, options, used);
   uint64_t state = 42;
@@ -86,9 +89,9 @@ std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& 
   (void)at_tree;
   uint64_t bytes = 0;
   for (const PfdTree& t : b->level.cells) bytes += t.stats.bytes;
-  std::fprintf(stderr, "%s level %zu: N = %zu fragments, %zu BSP nodes, %zu view cells, %llu tree bytes\n",
+  std::fprintf(stderr, "%s level %zu: N = %zu fragments, %zu BSP nodes, %zu view cells, %llu tree bytes (share_min %u)\n",
                spec.c_str(), li, b->bsp.fragments.size(), b->bsp.nodes.size(), b->level.cells.size(),
-               static_cast<unsigned long long>(bytes));
+               static_cast<unsigned long long>(bytes), share_min);
   b->name = spec + "/level" + std::to_string(li);
   return b;
 }
@@ -174,11 +177,14 @@ int main(int argc, char** argv) {
   std::string scenes = "gen:office,freedoom2.wad:MAP01";
   std::string level = "largest";
   uint32_t eyes = 4096;
+  uint32_t share_min = PfdOptions{}.share_min;
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (std::strncmp(argv[i], "--scenes=", 9) == 0) scenes = argv[i] + 9;
     else if (std::strncmp(argv[i], "--level=", 8) == 0) level = argv[i] + 8;
     else if (std::strncmp(argv[i], "--eyes=", 7) == 0) eyes = static_cast<uint32_t>(std::max(1l, std::atol(argv[i] + 7)));
+    else if (std::strncmp(argv[i], "--share-min=", 12) == 0)
+      share_min = static_cast<uint32_t>(std::strtoul(argv[i] + 12, nullptr, 10));
     else rest.push_back(argv[i]);
   }
   int rest_argc = static_cast<int>(rest.size());
@@ -187,7 +193,7 @@ int main(int argc, char** argv) {
   std::string spec;
   try {
     while (std::getline(ss, spec, ',')) {
-      const auto b = prepare(spec, level, eyes);
+      const auto b = prepare(spec, level, eyes, share_min);
       benchmark::RegisterBenchmark((b->name + "/pfdQuery").c_str(), benchPfdQuery, b);
       benchmark::RegisterBenchmark((b->name + "/pfdQueryRuns").c_str(), benchPfdQueryRuns, b);
       benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/random").c_str(), benchPfdQueryCoherent, b, false);

@@ -10,12 +10,45 @@
 namespace walkvis {
 namespace {
 
+// Calls emit(run index) for each flat run that `ref` (a run, or a sequence) expands to, in order.
+// A sequence nests at most kPfdMaxSeqDepth deep (the builder and the loader ensure it).
+template <typename Emit>
+inline void forEachRun(const PfdTree& tree, uint32_t ref, Emit&& emit) {
+  if (!(ref & kPfdSeqBit)) {
+    emit(ref);
+    return;
+  }
+  struct Frame {
+    uint32_t next, end;
+  };
+  Frame stack[kPfdMaxSeqDepth];
+  int top = 0;
+  const PfdSeq& root = tree.seqs[ref & ~kPfdSeqBit];
+  stack[0] = {root.first, root.first + root.count};
+  while (top >= 0) {
+    Frame& f = stack[top];
+    if (f.next == f.end) {
+      --top;
+      continue;
+    }
+    const uint32_t item = tree.seq_items[f.next++];
+    if (!(item & kPfdSeqBit)) {
+      emit(item);
+      continue;
+    }
+    const PfdSeq& c = tree.seqs[item & ~kPfdSeqBit];
+    stack[++top] = {c.first, c.first + c.count};
+  }
+}
+
 inline void appendList(const PfdTree& tree, const PfdNode& node, std::vector<uint32_t>& order) {
   const uint32_t end = node.first_ref + node.ref_count;
   for (uint32_t r = node.first_ref; r < end; ++r) {
-    const PfdRun& run = tree.runs[tree.run_refs[r]];
-    const uint32_t* ids = tree.fragment_ids.data() + run.first;
-    order.insert(order.end(), ids, ids + run.count);
+    forEachRun(tree, tree.run_refs[r], [&](uint32_t run_index) {
+      const PfdRun& run = tree.runs[run_index];
+      const uint32_t* ids = tree.fragment_ids.data() + run.first;
+      order.insert(order.end(), ids, ids + run.count);
+    });
   }
 }
 
@@ -61,7 +94,7 @@ PfdQueryResult walkRuns(const PfdTree& tree, const glm::dvec3& eye, Emit&& emit)
   uint32_t i = 0;
   for (;;) {
     const PfdNode& node = tree.nodes[i];
-    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) emit(tree.run_refs[r]);
+    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) forEachRun(tree, tree.run_refs[r], emit);
     if (node.front < 0) break;
     const int s = planeSide(tree.planes[node.plane], eye);
     ++result.tests;
@@ -158,6 +191,7 @@ void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed) {
   PfdStats& s = tree.stats;
   s.bytes = tree.nodes.size() * sizeof(PfdNode) + tree.run_refs.size() * sizeof(uint32_t) +
             tree.runs.size() * sizeof(PfdRun) + tree.fragment_ids.size() * sizeof(uint32_t) +
+            tree.seqs.size() * sizeof(PfdSeq) + tree.seq_items.size() * sizeof(uint32_t) +
             tree.planes.size() * sizeof(Plane);
   for (const auto& ring : tree.region) s.bytes += ring.size() * sizeof(glm::dvec2);
   s.tests_mean = 0.0;

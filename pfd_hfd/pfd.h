@@ -10,9 +10,13 @@
 // the region and both children carry on from the same point of the traversal. Region corners are
 // exact rationals (CGAL), so a test-line through a corner is recognised as touching, not crossing.
 //
-// Layout: every distinct emitted sequence of fragments (a fully resolved BSP subtree, or one
-// node's front-facing fragments) is stored once as a run of `fragment_ids`; a node's list is a
-// range of `run_refs`. A query appends a handful of runs.
+// Layout: a node's list is a range of `run_refs`; each reference is a flat run (a range of
+// `fragment_ids`) or a sequence (a range of `seq_items`, each again a run or an older sequence).
+// The order of a fully resolved BSP subtree is the concatenation of its far child's order, its
+// node's fragments and its near child's order; such orders repeat each other's sub-orders on
+// every branch of the tree (DESIGN.md, "What is already known"), so an order of at least
+// `share_min` ids is stored as a sequence of references to its children's orders, each distinct
+// order once; shorter ones are stored flat. A query expands the references into flat runs.
 #pragma once
 
 #include <cstdint>
@@ -41,6 +45,10 @@ struct PfdOptions {
   PfdHeuristic heuristic = PfdHeuristic::kBalanced;
   uint32_t candidates = 16;  // kBalanced: undecided lines examined per split (>= 1)
   bool dedup = true;         // store each distinct emitted run once (false: one run per emission)
+  // PFD with dedup: a resolved subtree's order of at least this many ids is stored as a sequence
+  // referring to its children's orders; shorter ones flat. Smaller: less memory, more (shorter)
+  // runs per query.
+  uint32_t share_min = 64;
   // Bytes one tree may take while it is built (its arrays plus the dedup index); 0 = no limit.
   // Exceeding it throws PfdBudgetError.
   uint64_t max_memory = 0;
@@ -74,6 +82,8 @@ struct PfdStats {
   uint64_t list_fragments = 0;    // fragment ids the lists would hold without runs (naive storage)
   uint64_t pool_entries = 0;      // fragment ids stored (each distinct run once)
   uint64_t runs = 0;              // distinct runs
+  uint64_t seqs = 0;              // distinct sequences (orders stored as references to sub-orders)
+  uint64_t seq_items = 0;         // references stored in sequences
   uint64_t test_planes = 0;       // distinct planes used as test-lines
   uint64_t exact_fallbacks = 0;   // corner-versus-line signs the double filter could not decide
   uint64_t touching = 0;          // line-versus-region decisions where a corner lay exactly on the line
@@ -102,6 +112,18 @@ struct PfdRun {
   uint32_t count = 0;
 };
 
+// A list entry or sequence item: a run index, or kPfdSeqBit | a sequence index.
+constexpr uint32_t kPfdSeqBit = 0x80000000u;
+// Sequences nest at most this deep (a sequence of depth d holds items of depth < d; a run has
+// depth 0): a query expands them with a fixed stack.
+constexpr uint32_t kPfdMaxSeqDepth = 16;
+
+struct PfdSeq {
+  uint32_t first = 0;   // seq_items[first, first + count): runs or sequences of smaller index
+  uint32_t count = 0;
+  uint32_t length = 0;  // fragment ids it expands to
+};
+
 // An axis-aligned box of the xz-plane: a view cell. The region of a tree is W clipped to it.
 struct PfdBox {
   glm::dvec2 lo{0.0}, hi{0.0};
@@ -113,8 +135,10 @@ struct PfdTree {
   std::vector<std::vector<glm::dvec2>> region;  // W ∩ cell as convex (x, z) pieces (double approximations)
   std::vector<Plane> planes;                    // test-line planes (BSP or fragment planes)
   std::vector<PfdNode> nodes;                   // nodes[0] is the root; children have larger indices
-  std::vector<uint32_t> run_refs;
+  std::vector<uint32_t> run_refs;               // runs or sequences (kPfdSeqBit)
   std::vector<PfdRun> runs;
+  std::vector<PfdSeq> seqs;
+  std::vector<uint32_t> seq_items;              // runs or sequences (kPfdSeqBit)
   std::vector<uint32_t> fragment_ids;           // BSP fragment indices
   PfdStats stats;
 };
@@ -147,10 +171,11 @@ struct PfdQueryResult {
 PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order);
 
 // The same walk, appending the runs to draw (ranges of tree.fragment_ids, in order) instead of
-// copying the ids: what a renderer that keeps per-fragment draw ranges needs.
+// copying the ids: what a renderer that keeps per-fragment draw ranges needs. Sequences are
+// expanded: only flat runs are appended.
 PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs);
-// The same walk, appending run indices (into tree.runs) instead: for per-run structures such as
-// the backface list cullers (backface/list_cull.h), which are built over tree.runs in order.
+// The same walk, appending run indices (into tree.runs; sequences expanded) instead: for per-run
+// structures such as the backface list cullers (backface/list_cull.h), built over tree.runs.
 PfdQueryResult pfdQueryRunIds(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& run_ids);
 
 // Frame coherence: the path of the last query and where each node's list starts in `order`.

@@ -325,6 +325,15 @@ struct MemoEntry {
   uint32_t count = 0;
 };
 
+// A subtree whose order resolvedRef is assembling from its children's.
+struct RefFrame {
+  int32_t node = -1;
+  int32_t far_child = -1, near_child = -1;
+  int s = 0;
+  uint8_t stage = 0;  // 0: start; 1: far child's entry wanted; 2: near child's; 3: combine
+  uint32_t far_ref = UINT32_MAX - 1, near_ref = UINT32_MAX - 1;  // kEmptyRun
+};
+
 class Builder {
  public:
   Builder(const BspTree& bsp, double height, const PfdOptions& options, const Region& root, PfdTree& out)
@@ -529,9 +538,9 @@ class Builder {
     }
   }
 
-  // The emission of a resolved subtree, memoised by the sides of its varying lines. Returns the
-  // output run when one already holds it (PFD with dedup), else fills `content`.
-  uint32_t resolvedEmission(int32_t id, const Region& r, std::span<const uint32_t>& content) {
+  // The key of a resolved subtree's order: the sides of the lines inside it that cross the
+  // tree's whole region (2 bits each) in key_, and its hash.
+  uint64_t memoKey(int32_t id) {
     const auto [b, e] = vary_range_[id];
     key_.assign((e - b + 31) / 32, 0);
     for (uint32_t k = b; k < e; ++k) {
@@ -543,37 +552,222 @@ class Builder {
       h = (h ^ w) * 1099511628211ull;
       h ^= h >> 31;
     }
-    const bool to_runs = options_.dedup && !hfd();
+    return h;
+  }
+
+  // The memo entry for key_ (just made by memoKey(id) with hash h), or null.
+  const MemoEntry* memoFind(int32_t id, uint64_t h) const {
     auto [lo, hi] = memo_.equal_range(h);
     for (auto it = lo; it != hi; ++it) {
       const MemoEntry& m = memo_entries_[it->second];
       if (m.node == id && m.key_words == key_.size() &&
-          std::equal(key_.begin(), key_.end(), key_pool_.begin() + m.key_first)) {
-        if (to_runs) return m.run;
-        content = std::span<const uint32_t>(memo_pool_.data() + m.first, m.count);
-        return UINT32_MAX;
-      }
+          std::equal(key_.begin(), key_.end(), key_pool_.begin() + m.key_first))
+        return &m;
     }
+    return nullptr;
+  }
+
+  MemoEntry& memoAdd(int32_t id, uint64_t h) {
     MemoEntry m;
     m.node = id;
     m.key_first = static_cast<uint32_t>(key_pool_.size());
     m.key_words = static_cast<uint32_t>(key_.size());
     key_pool_.insert(key_pool_.end(), key_.begin(), key_.end());
+    memo_.emplace(h, static_cast<uint32_t>(memo_entries_.size()));
+    memo_entries_.push_back(m);
+    return memo_entries_.back();
+  }
+
+  // HFD or no dedup: the emission of a resolved subtree as ids, memoised by the sides of its
+  // varying lines.
+  void resolvedEmission(int32_t id, const Region& r, std::span<const uint32_t>& content) {
+    const uint64_t h = memoKey(id);
+    if (const MemoEntry* m = memoFind(id, h)) {
+      content = std::span<const uint32_t>(memo_pool_.data() + m->first, m->count);
+      return;
+    }
     scratch_.clear();
     emitSubtree(id, r, scratch_);
-    if (to_runs) {
-      m.run = scratch_.empty() ? kEmptyRun : findOrAddRun(scratch_);
-      memo_.emplace(h, static_cast<uint32_t>(memo_entries_.size()));
-      memo_entries_.push_back(m);
-      return m.run;
-    }
+    MemoEntry& m = memoAdd(id, h);
     m.first = static_cast<uint32_t>(memo_pool_.size());
     m.count = static_cast<uint32_t>(scratch_.size());
     memo_pool_.insert(memo_pool_.end(), scratch_.begin(), scratch_.end());
-    memo_.emplace(h, static_cast<uint32_t>(memo_entries_.size()));
-    memo_entries_.push_back(m);
     content = std::span<const uint32_t>(memo_pool_.data() + m.first, m.count);
-    return UINT32_MAX;
+  }
+
+  bool toRefs() const { return options_.dedup && !hfd(); }
+
+  uint32_t refLength(uint32_t ref) const {
+    if (ref == kEmptyRun) return 0;
+    return ref & kPfdSeqBit ? out_.seqs[ref & ~kPfdSeqBit].length : out_.runs[ref].count;
+  }
+  uint32_t refDepth(uint32_t ref) const { return ref & kPfdSeqBit ? seq_depth_[ref & ~kPfdSeqBit] : 0; }
+
+  // Appends the ids `ref` expands to (sequences nest at most kPfdMaxSeqDepth deep).
+  void expandRef(uint32_t ref, std::vector<uint32_t>& out) const {
+    if (ref == kEmptyRun) return;
+    if (!(ref & kPfdSeqBit)) {
+      const PfdRun& run = out_.runs[ref];
+      out.insert(out.end(), out_.fragment_ids.begin() + run.first, out_.fragment_ids.begin() + run.first + run.count);
+      return;
+    }
+    const PfdSeq& q = out_.seqs[ref & ~kPfdSeqBit];
+    for (uint32_t k = q.first; k < q.first + q.count; ++k) expandRef(out_.seq_items[k], out);
+  }
+
+  // PFD with dedup: the list entry for the order of the resolved subtree `root` in r (kEmptyRun
+  // when it emits nothing). Each (subtree, sides of its varying lines) is memoised; an order of at
+  // least share_min ids becomes a sequence [far child's order, the node's fragments, near child's
+  // order], sharing the children's entries, and a shorter one a flat run. Iterative: a degenerate
+  // BSP may be as deep as it has nodes.
+  uint32_t resolvedRef(int32_t root, const Region& r) {
+    {
+      const uint64_t h = memoKey(root);
+      if (const MemoEntry* m = memoFind(root, h)) return m->run;
+    }
+    std::vector<RefFrame>& stack = ref_frames_;
+    stack.clear();
+    stack.push_back(RefFrame{root});
+    uint32_t result = kEmptyRun;
+    // Returns true when the child's entry was known (memo), false when a frame was pushed for it.
+    auto want = [&](int32_t child, uint32_t& slot) {
+      if (child < 0 || smallSubtree(child)) {
+        slot = kEmptyRun;  // combine() emits a small child's order itself
+        return true;
+      }
+      const uint64_t h = memoKey(child);
+      if (const MemoEntry* m = memoFind(child, h)) {
+        slot = m->run;
+        return true;
+      }
+      stack.push_back(RefFrame{child});
+      return false;
+    };
+    while (!stack.empty()) {
+      const size_t top = stack.size() - 1;
+      RefFrame& f = stack[top];
+      if (f.stage == 0) {
+        const BspNode& node = bsp_.nodes[f.node];
+        if (vary_range_[f.node].first == vary_range_[f.node].second || smallSubtree(f.node)) {
+          // No line inside crosses the tree's region (its one order), or too few fragments for a
+          // sequence: flat.
+          scratch_.clear();
+          emitSubtree(f.node, r, scratch_);
+          result = scratch_.empty() ? kEmptyRun : findOrAddRun(scratch_);
+        } else {
+          f.s = side(static_cast<uint32_t>(f.node), r);
+          children(node, f.s, f.far_child, f.near_child);
+          f.stage = 1;
+          if (!want(f.far_child, f.far_ref)) continue;
+          stack[top].stage = 2;
+          if (!want(stack[top].near_child, stack[top].near_ref)) continue;
+          stack[top].stage = 3;
+          continue;
+        }
+      } else if (f.stage == 3) {
+        result = combine(f.node, f.s, f.far_ref, f.near_ref, r);
+      } else {
+        continue;  // unreachable: a frame waiting for a child is never on top
+      }
+      // stack[top] is done with `result`: memoise it and hand it to the parent.
+      const int32_t done = stack[top].node;
+      const uint64_t h = memoKey(done);
+      memoAdd(done, h).run = result;
+      stack.pop_back();
+      if (stack.empty()) break;
+      RefFrame& parent = stack.back();
+      if (parent.stage == 1) {
+        parent.far_ref = result;
+        parent.stage = 2;
+        if (!want(parent.near_child, stack.back().near_ref)) continue;
+        stack.back().stage = 3;
+      } else {
+        parent.near_ref = result;
+        parent.stage = 3;
+      }
+    }
+    return result;
+  }
+
+  // The entry for [far, the fragments of `node` on side s, near].
+  // A subtree with fewer fragments than share_min: its orders are always stored flat, inside its
+  // ancestors' runs, never as runs of their own.
+  bool smallSubtree(int32_t id) const { return frag_range_[id].second - frag_range_[id].first < options_.share_min; }
+
+  uint32_t combine(int32_t node_id, int s, uint32_t far_ref, uint32_t near_ref, const Region& r) {
+    int32_t far_child, near_child;
+    children(bsp_.nodes[node_id], s, far_child, near_child);
+    own_.clear();
+    emitFragments(bsp_.nodes[node_id], s, r, own_);
+    uint64_t length = uint64_t{refLength(far_ref)} + own_.size() + refLength(near_ref);
+    small_far_.clear();
+    small_near_.clear();
+    if (far_child >= 0 && smallSubtree(far_child)) emitSubtree(far_child, r, small_far_);
+    if (near_child >= 0 && smallSubtree(near_child)) emitSubtree(near_child, r, small_near_);
+    length += small_far_.size() + small_near_.size();
+    if (length == 0) return kEmptyRun;
+    if (length < std::max<uint32_t>(options_.share_min, 1)) {
+      flat_.clear();
+      expandRef(far_ref, flat_);
+      flat_.insert(flat_.end(), small_far_.begin(), small_far_.end());
+      flat_.insert(flat_.end(), own_.begin(), own_.end());
+      flat_.insert(flat_.end(), small_near_.begin(), small_near_.end());
+      expandRef(near_ref, flat_);
+      return findOrAddRun(flat_);
+    }
+    items_.clear();
+    acc_.clear();
+    // Short runs are copied together into one run; longer runs and sequences are referenced.
+    // A sequence already at the depth limit is inlined (its items referenced instead).
+    auto flush = [&] {
+      if (acc_.empty()) return;
+      items_.push_back(findOrAddRun(acc_));
+      acc_.clear();
+    };
+    auto part = [&](uint32_t ref) {
+      if (ref == kEmptyRun) return;
+      if (!(ref & kPfdSeqBit) && out_.runs[ref].count < options_.share_min) {
+        expandRef(ref, acc_);
+        return;
+      }
+      flush();
+      items_.push_back(ref);
+    };
+    auto add = [&](uint32_t ref) {
+      if (ref != kEmptyRun && refDepth(ref) >= kPfdMaxSeqDepth) {
+        const PfdSeq q = out_.seqs[ref & ~kPfdSeqBit];
+        for (uint32_t k = q.first; k < q.first + q.count; ++k) part(out_.seq_items[k]);
+      } else {
+        part(ref);
+      }
+    };
+    add(far_ref);
+    acc_.insert(acc_.end(), small_far_.begin(), small_far_.end());
+    acc_.insert(acc_.end(), own_.begin(), own_.end());
+    acc_.insert(acc_.end(), small_near_.begin(), small_near_.end());
+    add(near_ref);
+    flush();
+    if (items_.size() == 1) return items_[0];
+    return findOrAddSeq(items_, static_cast<uint32_t>(length));
+  }
+
+  uint32_t findOrAddSeq(const std::vector<uint32_t>& items, uint32_t length) {
+    const uint64_t h = hashRun(items.data(), items.size()) ^ 0x5bd1e995ull;
+    auto [lo, hi] = seq_index_.equal_range(h);
+    for (auto it = lo; it != hi; ++it) {
+      const PfdSeq& q = out_.seqs[it->second];
+      if (q.count == items.size() && std::equal(items.begin(), items.end(), out_.seq_items.begin() + q.first))
+        return it->second | kPfdSeqBit;
+    }
+    const uint32_t id = static_cast<uint32_t>(out_.seqs.size());
+    if (id >= kPfdSeqBit) throw PfdBudgetError("pfd: more than 2^31 sequences");
+    uint32_t depth = 0;
+    for (uint32_t item : items) depth = std::max(depth, refDepth(item));
+    out_.seqs.push_back({static_cast<uint32_t>(out_.seq_items.size()), static_cast<uint32_t>(items.size()), length});
+    out_.seq_items.insert(out_.seq_items.end(), items.begin(), items.end());
+    seq_depth_.push_back(static_cast<uint8_t>(depth + 1));
+    seq_index_.emplace(h, id);
+    return id | kPfdSeqBit;
   }
 
   const std::vector<std::vector<glm::dvec2>>& rings(const Region& r) {
@@ -686,10 +880,10 @@ class Builder {
     out_.run_refs.push_back(options_.dedup ? findOrAddRun(v) : newRun(v));
   }
 
-  void addRunRef(uint32_t run) {
-    if (run == kEmptyRun) return;
-    list_fragments += out_.runs[run].count;
-    out_.run_refs.push_back(run);
+  void addRunRef(uint32_t ref) {
+    if (ref == kEmptyRun) return;
+    list_fragments += refLength(ref);
+    out_.run_refs.push_back(ref);
   }
 
   uint32_t newRun(const std::vector<uint32_t>& ids) {
@@ -707,7 +901,8 @@ class Builder {
            out_.runs.size() * (sizeof(PfdRun) + (options_.dedup ? 48 : 0)) +
            out_.fragment_ids.size() * sizeof(uint32_t) + out_.planes.size() * sizeof(Plane) +
            memo_entries_.size() * (sizeof(MemoEntry) + 48) + key_pool_.size() * sizeof(uint64_t) +
-           memo_pool_.size() * sizeof(uint32_t);
+           memo_pool_.size() * sizeof(uint32_t) + out_.seqs.size() * (sizeof(PfdSeq) + 1 + 48) +
+           out_.seq_items.size() * sizeof(uint32_t);
   }
 
  private:
@@ -801,10 +996,13 @@ class Builder {
         }
         if (resolved(item.node, r)) {
           stack.pop_back();
-          std::span<const uint32_t> content;
-          const uint32_t run = resolvedEmission(item.node, r, content);
-          if (run != UINT32_MAX) addRunRef(run);
-          else addRun(content, r);
+          if (toRefs()) {
+            addRunRef(resolvedRef(item.node, r));
+          } else {
+            std::span<const uint32_t> content;
+            resolvedEmission(item.node, r, content);
+            addRun(content, r);
+          }
           continue;
         }
         stack.pop_back();
@@ -890,6 +1088,10 @@ class Builder {
   std::vector<MemoEntry> memo_entries_;
   std::unordered_multimap<uint64_t, uint32_t> memo_;
   std::unordered_multimap<uint64_t, uint32_t> run_index_;
+  std::unordered_multimap<uint64_t, uint32_t> seq_index_;
+  std::vector<uint8_t> seq_depth_;  // per sequence: 1 + the deepest item's depth (a run: 0)
+  std::vector<uint32_t> own_, flat_, acc_, items_, small_far_, small_near_;
+  std::vector<RefFrame> ref_frames_;
   std::vector<std::vector<glm::dvec2>> rings_;
   uint32_t rings_stamp_ = 0;
   uint32_t region_id_ = 0, region_counter_ = 0;
@@ -995,6 +1197,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.list_fragments = builder.list_fragments;
   s.pool_entries = tree.fragment_ids.size();
   s.runs = tree.runs.size();
+  s.seqs = tree.seqs.size();
+  s.seq_items = tree.seq_items.size();
   s.test_planes = tree.planes.size();
   s.exact_fallbacks = counters.exact_fallbacks + builder.counters.exact_fallbacks;
   s.touching = builder.counters.touching;
@@ -1014,6 +1218,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   tree.run_refs.shrink_to_fit();
   tree.runs.shrink_to_fit();
   tree.fragment_ids.shrink_to_fit();
+  tree.seqs.shrink_to_fit();
+  tree.seq_items.shrink_to_fit();
   s.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   measurePfd(tree, options.stat_eyes, options.seed);
   return tree;

@@ -8,9 +8,12 @@
 //             u32 levels; per level: u32 level, f64 floor_y, f64 height, u32 cells; per cell (tree):
 //             f64 height, u8 has_cell, 4 f64 cell box, u32 pieces (u32 corners, 2 f64 each),
 //             u32 planes (4 f64), u32 nodes (u32 plane, i32 front, i32 back, u32 first_ref, u32 ref_count),
-//             u32 run_refs (u32), u32 runs (2 u32), u32 fragment_ids (u32), stats (16 u64, 5 f64).
+//             u32 run_refs (u32), u32 runs (2 u32), u32 fragment_ids (u32), u32 seqs (3 u32),
+//             u32 seq_items (u32), stats (18 u64, 5 f64). A run reference with the top bit set
+//             (kPfdSeqBit) names a sequence.
 // Loading checks everything a query relies on: children after their parent, plane, run and
 // fragment indices in range, so that a loaded tree is queried without further checks.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -26,7 +29,8 @@ namespace {
 
 constexpr char kMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
 // 2: tree kind and visibility sampling after eye_height; HFD counters in the stats.
-constexpr uint32_t kVersion = 2;
+// 3: sequences (orders stored as references to sub-orders) after the fragment ids.
+constexpr uint32_t kVersion = 3;
 constexpr size_t kHeaderBytes = 32;
 
 using Writer = ByteWriter;
@@ -93,9 +97,17 @@ void writeTree(Writer& w, const PfdTree& t) {
   }
   w.put(static_cast<uint32_t>(t.fragment_ids.size()));
   for (uint32_t f : t.fragment_ids) w.put(f);
+  w.put(static_cast<uint32_t>(t.seqs.size()));
+  for (const PfdSeq& q : t.seqs) {
+    w.put(q.first);
+    w.put(q.count);
+    w.put(q.length);
+  }
+  w.put(static_cast<uint32_t>(t.seq_items.size()));
+  for (uint32_t x : t.seq_items) w.put(x);
   const PfdStats& s = t.stats;
   for (uint64_t v : {s.fragments, s.nodes, s.leaves, s.depth_max, s.list_entries, s.list_fragments, s.pool_entries,
-                     s.runs, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max, s.visibility_tests,
+                     s.runs, s.seqs, s.seq_items, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max, s.visibility_tests,
                      s.visibility_rays, s.hidden_rejected})
     w.put(v);
   for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, 0.0}) w.put(v);
@@ -152,9 +164,19 @@ PfdTree readTree(Reader& r, size_t fragments) {
   const uint32_t ids = r.count(4);
   t.fragment_ids.resize(ids);
   for (uint32_t& x : t.fragment_ids) x = r.get<uint32_t>();
+  const uint32_t seqs = r.count(12);
+  t.seqs.resize(seqs);
+  for (PfdSeq& q : t.seqs) {
+    q.first = r.get<uint32_t>();
+    q.count = r.get<uint32_t>();
+    q.length = r.get<uint32_t>();
+  }
+  const uint32_t items = r.count(4);
+  t.seq_items.resize(items);
+  for (uint32_t& x : t.seq_items) x = r.get<uint32_t>();
   PfdStats& s = t.stats;
   for (uint64_t* v : {&s.fragments, &s.nodes, &s.leaves, &s.depth_max, &s.list_entries, &s.list_fragments,
-                      &s.pool_entries, &s.runs, &s.test_planes, &s.exact_fallbacks, &s.touching, &s.decisions,
+                      &s.pool_entries, &s.runs, &s.seqs, &s.seq_items, &s.test_planes, &s.exact_fallbacks, &s.touching, &s.decisions,
                       &s.tests_max, &s.visibility_tests, &s.visibility_rays, &s.hidden_rejected})
     *v = r.get<uint64_t>();
   double unused = 0.0;
@@ -176,8 +198,33 @@ PfdTree readTree(Reader& r, size_t fragments) {
     if (static_cast<uint64_t>(n.first_ref) + n.ref_count > refs)
       r.fail("PFD node " + std::to_string(i) + " has a list out of range");
   }
+  // A reference names a run, or a sequence; a sequence only refers to sequences before it (so
+  // none contains itself), nests at most kPfdMaxSeqDepth deep and expands to its stated length.
+  auto refOk = [&](uint32_t x, uint32_t seq_limit) {
+    return x & kPfdSeqBit ? (x & ~kPfdSeqBit) < seq_limit : x < runs;
+  };
   for (uint32_t x : t.run_refs)
-    if (x >= runs) r.fail("PFD run reference out of range");
+    if (!refOk(x, seqs)) r.fail("PFD run reference out of range");
+  std::vector<uint8_t> depth(seqs, 0);
+  for (uint32_t i = 0; i < seqs; ++i) {
+    const PfdSeq& q = t.seqs[i];
+    if (static_cast<uint64_t>(q.first) + q.count > items) r.fail("PFD sequence " + std::to_string(i) + " out of range");
+    uint64_t length = 0;
+    uint32_t d = 0;
+    for (uint32_t k = q.first; k < q.first + q.count; ++k) {
+      const uint32_t x = t.seq_items[k];
+      if (!refOk(x, i)) r.fail("PFD sequence " + std::to_string(i) + " refers to an item out of range");
+      if (x & kPfdSeqBit) {
+        length += t.seqs[x & ~kPfdSeqBit].length;
+        d = std::max<uint32_t>(d, depth[x & ~kPfdSeqBit]);
+      } else {
+        length += x < runs ? t.runs[x].count : 0;
+      }
+    }
+    if (d + 1 > kPfdMaxSeqDepth) r.fail("PFD sequence " + std::to_string(i) + " nests too deep");
+    if (length != q.length) r.fail("PFD sequence " + std::to_string(i) + " has a wrong length");
+    depth[i] = static_cast<uint8_t>(d + 1);
+  }
   for (const PfdRun& x : t.runs)
     if (static_cast<uint64_t>(x.first) + x.count > ids) r.fail("PFD run out of range");
   for (uint32_t x : t.fragment_ids)

@@ -403,5 +403,83 @@ TEST(Pfd, TreeFileRoundTripAndCorruption) {
   std::filesystem::remove(path);
 }
 
+// Orders stored as sequences of their children's orders (share_min small) query exactly as flat
+// runs do, match the BSP, survive the tree file, and a sequence that refers to itself or states a
+// wrong length is a load error.
+TEST(Pfd, SequencesShareSubOrders) {
+  bool any_seqs = false;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const Scene scene = randomBuilding(seed, 14, 1.5);
+    const BspTree bsp = buildBsp(scene);
+    const FloorLevel& level = scene.levels[0];
+    PfdOptions options;
+    options.stat_eyes = 500;
+    options.share_min = 4;
+    const PfdTree tree = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+    options.share_min = UINT32_MAX;
+    const PfdTree flat = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    checkStructure(bsp, tree);
+    EXPECT_EQ(flat.stats.seqs, 0u);
+    EXPECT_EQ(tree.stats.nodes, flat.stats.nodes);
+    any_seqs |= tree.stats.seqs > 0;
+    const CheckResult r = checkTree(bsp, tree, 1000, seed * 11 + 3);
+    EXPECT_EQ(r.mismatches, 0u);
+    std::vector<uint32_t> a, b;
+    uint64_t state = seed;
+    for (int i = 0; i < 300; ++i) {
+      const glm::dvec2 p = samplePfdRegion(tree, state);
+      pfdQuery(tree, {p.x, tree.height, p.y}, a);
+      pfdQuery(flat, {p.x, flat.height, p.y}, b);
+      ASSERT_EQ(a, b);
+    }
+    if (tree.stats.seqs == 0) continue;
+    TreeFile file;
+    file.bsp = bsp;
+    file.eye_height = scene.eye_height;
+    file.levels.push_back({});
+    file.levels[0].cells.push_back(tree);
+    const std::string path = (std::filesystem::temp_directory_path() / "walkvis_test_pfd_seq.wvt").string();
+    saveTreeFile(file, path);
+    const TreeFile back = loadTreeFile(path);
+    const PfdTree& t = back.levels[0].cells[0];
+    EXPECT_EQ(t.seq_items, tree.seq_items);
+    ASSERT_EQ(t.seqs.size(), tree.seqs.size());
+    for (size_t i = 0; i < t.seqs.size(); ++i) EXPECT_EQ(t.seqs[i].length, tree.seqs[i].length);
+    // The last sequence refers to itself: a cycle a query would never leave.
+    PfdTree& bad = file.levels[0].cells[0];
+    const uint32_t last = static_cast<uint32_t>(bad.seqs.size() - 1);
+    const uint32_t saved = bad.seq_items[bad.seqs[last].first];
+    bad.seq_items[bad.seqs[last].first] = last | kPfdSeqBit;
+    saveTreeFile(file, path);
+    EXPECT_THROW(loadTreeFile(path), SceneError);
+    bad.seq_items[bad.seqs[last].first] = saved;
+    bad.seqs[last].length += 1;
+    saveTreeFile(file, path);
+    EXPECT_THROW(loadTreeFile(path), SceneError);
+    bad.seqs[last].length -= 1;
+    bad.run_refs.push_back(static_cast<uint32_t>(bad.seqs.size()) | kPfdSeqBit);
+    saveTreeFile(file, path);
+    EXPECT_THROW(loadTreeFile(path), SceneError);
+    std::filesystem::remove(path);
+  }
+  EXPECT_TRUE(any_seqs);
+}
+
+// On an office the sequences store fewer ids than flat runs do (the point of them).
+TEST(Pfd, SequencesStoreLess) {
+  const Scene scene = loadScene("gen:office?rooms=32");
+  const BspTree bsp = buildBsp(scene);
+  const FloorLevel& level = scene.levels[0];
+  PfdOptions options;
+  options.stat_eyes = 0;
+  const PfdTree tree = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+  options.share_min = UINT32_MAX;
+  const PfdTree flat = buildPfd(bsp, level.walkable, level.floor_y + scene.eye_height, std::nullopt, options);
+  EXPECT_GT(tree.stats.seqs, 0u);
+  EXPECT_LT(tree.stats.pool_entries + tree.stats.seq_items, flat.stats.pool_entries);
+  EXPECT_EQ(tree.stats.list_fragments, flat.stats.list_fragments);
+}
+
 }  // namespace
 }  // namespace walkvis

@@ -29,6 +29,7 @@ struct BuildArgs {
   uint64_t visibility_seed = 1;
   bool keep_back_faces = false;
   bool no_dedup = false;
+  uint32_t share_min = PfdOptions{}.share_min;
   uint32_t stat_eyes = 10000;
   bool json = false;
 };
@@ -136,6 +137,7 @@ int runBuild(const BuildArgs& args) {
   else if (args.heuristic == "traversal") options.tree.heuristic = PfdHeuristic::kTraversal;
   else throw SceneError("--heuristic: expected balanced or traversal, got '" + args.heuristic + "'");
   options.tree.dedup = !args.no_dedup;
+  options.tree.share_min = args.share_min;
   options.tree.stat_eyes = args.stat_eyes;
 
   auto progress = [](const std::string& line) {
@@ -204,6 +206,7 @@ int runBuild(const BuildArgs& args) {
   j["cell_memory"] = options.cell_memory;
   j["heuristic"] = args.heuristic;
   j["dedup"] = !args.no_dedup;
+  j["share_min"] = args.share_min;
   j["total_bytes"] = used;
   uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0;
   auto trees = nlohmann::ordered_json::array();
@@ -226,15 +229,18 @@ int runBuild(const BuildArgs& args) {
       e["list_fragments"] = s.list_fragments;
       e["pool_entries"] = s.pool_entries;
       e["runs"] = s.runs;
+      e["seqs"] = s.seqs;
+      e["seq_items"] = s.seq_items;
       e["bytes"] = s.bytes;
       e["view_cells"] = level.cells.size();
       e["build_seconds"] = s.build_seconds;
       e["log43_N"] = log43;
       e["entries_bound"] = entries_bound;
-      // Entries stored: run references in the lists plus fragment ids in the run pool.
-      e["stored_entries"] = s.list_entries + s.pool_entries;
-      e["within_entries_bound"] = static_cast<double>(s.list_entries + s.pool_entries) <= entries_bound;
-      if (static_cast<double>(s.list_entries + s.pool_entries) > entries_bound) ++over_bound;
+      // Entries stored: references in the lists and sequences plus fragment ids in the run pool.
+      const uint64_t stored = s.list_entries + s.pool_entries + s.seq_items;
+      e["stored_entries"] = stored;
+      e["within_entries_bound"] = static_cast<double>(stored) <= entries_bound;
+      if (static_cast<double>(stored) > entries_bound) ++over_bound;
       if (hfd) {
         e["visibility_tests"] = s.visibility_tests;
         e["visibility_rays"] = s.visibility_rays;
@@ -322,6 +328,9 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                   "A tree over this many bytes is cut into four view cells (default 64M; 0: never)");
   sub->add_option("--heuristic", args->heuristic, "Which undecided test-line first: balanced or traversal");
   sub->add_flag("--no-dedup", args->no_dedup, "Store every emitted run, not each distinct one once");
+  sub->add_option("--share-min", args->share_min,
+                  "Orders of at least this many ids are stored as sequences of their sub-orders (less memory, more "
+                  "runs per query); 4294967295: flat runs only");
   sub->add_option("--stat-eyes", args->stat_eyes, "Random eyes per tree for tests_mean / tests_max");
   sub->add_flag("--json", args->json, "Print one JSON object");
   sub->callback([args, &runner] { runner = [args] { return runBuild(*args); }; });

@@ -59,6 +59,10 @@ constexpr double kTargetShrink = 1e-3;
 // wide, large enough not to graze the edge's own polygon in single precision.
 constexpr double kStepMargin = 1e-3;
 constexpr uint32_t kMaxStepDepth = 6;  // steps chained from one seed ray
+// Proof: blockers tried along each centre ray (the nearest may be a small thing in front of the
+// wall that hides everything), and halvings of a region or target part.
+constexpr uint32_t kProofHits = 3;
+constexpr uint32_t kMaxProofDepth = 6;
 
 uint64_t splitmix(uint64_t& state) {
   uint64_t z = (state += 0x9E3779B97F4A7C15ull);
@@ -198,13 +202,29 @@ struct Hit {
   double t = 0.0;  // along the unnormalised direction (target - eye)
 };
 
+// A blocked refinement ray, kept for the steps past its blocker's edges.
+struct StepParent {
+  glm::dvec3 eye, target, x;  // x: where it met the blocker
+  double hit_t = 0.0;
+  uint32_t outline = 0;
+  glm::dvec3 blocker_normal{0.0};
+};
+
 struct Probe {
-  glm::dvec3 eye;
-  glm::dvec3 target;
+  static constexpr uint32_t kNoParent = UINT32_MAX;
+  glm::dvec3 eye{0.0};  // a seed ray (parent == kNoParent), else worked out from the parent's step
+  glm::dvec3 target{0.0};
+  uint32_t parent = kNoParent;
+  uint32_t edge = 0, variant = 0;  // the parent's outline edge stepped past; 0 moves the target, 1 the eye
   uint32_t depth = 0;
   uint32_t key = 0;    // best first: chain depth plus the rank of the edge stepped past
   uint32_t order = 0;  // ties: first pushed, first cast (deterministic)
   bool operator>(const Probe& o) const { return key != o.key ? key > o.key : order > o.order; }
+};
+
+// A region part against a target part still to be proved hidden (runs of Scratch::pool).
+struct ProofItem {
+  uint32_t region_first, region_count, target_first, target_count, depth;
 };
 
 // Per-thread working memory, reused across queries so that a warm thread allocates nothing.
@@ -217,7 +237,11 @@ struct Scratch {
   std::vector<glm::dvec2> clip;
   std::vector<glm::dvec2> target2;  // the target in its plane basis, counter-clockwise, inset
   std::vector<Probe> queue;  // a binary heap on Probe::operator>
+  std::vector<StepParent> parents;
   std::vector<std::pair<double, uint32_t>> edge_order;
+  std::vector<glm::dvec2> pool;  // proof: region and target parts, each a run of vertices
+  std::vector<glm::dvec2> poly, poly2;
+  std::vector<ProofItem> items;
 };
 
 Scratch& scratch() {
@@ -242,6 +266,10 @@ struct VisibilityScene::Impl {
   std::vector<uint32_t> fragment_outline;
   std::vector<uint32_t> outline_first;
   std::vector<glm::dvec3> outline_vertices;
+  // The same outlines in their own plane's basis (planeBasis(plane.n), origin plane.n * plane.d),
+  // and their planes, for the single-occluder proof.
+  std::vector<glm::dvec2> outline_2d;
+  std::vector<Plane> outline_plane;
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -252,7 +280,7 @@ struct VisibilityScene::Impl {
 
   // Occlusion of the segment eye + t (target - eye), t in [0, tfar]. With `hit`, the nearest
   // front-side blocker is reported (rtcIntersect1), otherwise any (rtcOccluded1).
-  bool blocked(const glm::dvec3& eye, const glm::dvec3& target, double tfar, Hit* hit) const {
+  bool blocked(const glm::dvec3& eye, const glm::dvec3& target, double tfar, Hit* hit, double tnear = 0.0) const {
     const glm::vec3 o = rel(eye);
     const glm::dvec3 d = target - eye;
     RTCIntersectContext context;
@@ -271,7 +299,7 @@ struct VisibilityScene::Impl {
     rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
     rh.ray.dir_x = static_cast<float>(d.x), rh.ray.dir_y = static_cast<float>(d.y),
     rh.ray.dir_z = static_cast<float>(d.z);
-    rh.ray.tnear = 0.0f;
+    rh.ray.tnear = static_cast<float>(tnear);
     rh.ray.tfar = static_cast<float>(tfar);
     rh.ray.mask = ~0u;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -282,6 +310,37 @@ struct VisibilityScene::Impl {
     hit->fragment = triangle_fragment[rh.hit.primID];
     hit->t = rh.ray.tfar;
     return true;
+  }
+
+  // Occlusion of up to kPacket segments at once (one Embree packet: the rays of one test run from
+  // one region to one fragment, coherent enough for packet traversal). Returns true when some
+  // segment k < n is unblocked.
+  static constexpr int kPacket = 16;
+  bool anyClear16(const glm::dvec3* eyes, const glm::dvec3* targets, const double* tfar, int n) const {
+    RTCRay16 ray;
+    alignas(64) int valid[kPacket];
+    for (int k = 0; k < kPacket; ++k) {
+      valid[k] = k < n ? -1 : 0;
+      const int i = k < n ? k : 0;
+      const glm::vec3 o = rel(eyes[i]);
+      const glm::dvec3 d = targets[i] - eyes[i];
+      ray.org_x[k] = o.x, ray.org_y[k] = o.y, ray.org_z[k] = o.z;
+      ray.dir_x[k] = static_cast<float>(d.x), ray.dir_y[k] = static_cast<float>(d.y),
+      ray.dir_z[k] = static_cast<float>(d.z);
+      ray.tnear[k] = 0.0f;
+      ray.tfar[k] = static_cast<float>(tfar[i]);
+      ray.time[k] = 0.0f;
+      ray.mask[k] = ~0u;
+      ray.id[k] = static_cast<unsigned>(k);
+      ray.flags[k] = 0;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded16(valid, scene, &context, &ray);
+    for (int k = 0; k < n; ++k)
+      if (!(ray.tfar[k] < 0.0f)) return true;
+    return false;
   }
 };
 
@@ -309,6 +368,16 @@ VisibilityScene& VisibilityScene::operator=(VisibilityScene&&) noexcept = defaul
 VisibilityScene::~VisibilityScene() = default;
 
 const VisibilityOptions& VisibilityScene::options() const { return impl_->options; }
+
+std::string VisibilityScene::deviceInfo() const {
+  auto prop = [&](RTCDeviceProperty p) { return rtcGetDeviceProperty(impl_->device, p); };
+  const ssize_t v = prop(RTC_DEVICE_PROPERTY_VERSION);
+  return "Embree " + std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100) +
+         ": native packets 4 " + (prop(RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) ? "yes" : "no") + ", 8 " +
+         (prop(RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) ? "yes" : "no") + ", 16 " +
+         (prop(RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) ? "yes" : "no") + "; streams " +
+         (prop(RTC_DEVICE_PROPERTY_RAY_STREAM_SUPPORTED) ? "yes" : "no");
+}
 
 bool VisibilityScene::occluded(const glm::dvec3& from, const glm::dvec3& to) const {
   return impl_->blocked(from, to, 1.0, nullptr);
@@ -354,6 +423,8 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
       const std::vector<glm::dvec2> hull = convexHull(pts);
       const uint32_t o = static_cast<uint32_t>(s.outline_first.size() - 1);
       for (const auto& h : hull) s.outline_vertices.push_back(base + h.x * u + h.y * w);
+      s.outline_2d.insert(s.outline_2d.end(), hull.begin(), hull.end());
+      s.outline_plane.push_back(pl);
       s.outline_first.push_back(static_cast<uint32_t>(s.outline_vertices.size()));
       for (size_t k = i; k < j; ++k) s.fragment_outline[order[k]] = o;
       i = j;
@@ -480,10 +551,10 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
   // Eye side: only eyes in the target's front half-space, at least 2 end gaps from its plane, can
   // see it (nearer ones see it edge-on, and the ray would end before it starts).
   auto eyeSide = [&](const glm::dvec3& e) { return glm::dot(tp.n, e) - tp.d; };
-  // Casts one ray; true when unblocked.
-  auto castClear = [&](const glm::dvec3& e, const glm::dvec3& p, Hit* hit) -> int {
+  // Where the ray from e to p ends (a parameter along p - e), or -1 when it is not cast.
+  auto rayEnd = [&](const glm::dvec3& e, const glm::dvec3& p) -> double {
     const double side = eyeSide(e);
-    if (!(side > min_gap)) return -1;  // not a ray: the front side is not seen (or only edge-on)
+    if (!(side > min_gap)) return -1.0;  // not a ray: the front side is not seen (or only edge-on)
     // The ray's last stretch, within `gap` of the target's plane, is not cast. Its shadow on the
     // plane runs from p towards the eye's foot for gap * (in-plane length / side); it must stay
     // inside the target, or a blocker standing on the target's edge (a wall meeting it at a
@@ -506,10 +577,162 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       }
       gap = std::min(gap, 0.5 * exit * side / in_plane);
     }
-    if (!(gap >= min_gap)) return -1;
+    if (!(gap >= min_gap)) return -1.0;
+    return 1.0 - gap / side;
+  };
+  // Casts one ray; 1 when unblocked, 0 blocked, -1 not cast. `tnear` skips blockers met before it.
+  auto castClear = [&](const glm::dvec3& e, const glm::dvec3& p, Hit* hit, double tnear = 0.0) -> int {
+    const double tfar = rayEnd(e, p);
+    if (!(tfar > tnear)) return -1;
     ++counters.rays;
-    const double tfar = 1.0 - gap / side;
-    return s.blocked(e, p, tfar, hit) ? 0 : 1;
+    return s.blocked(e, p, tfar, hit, tnear) ? 0 : 1;
+  };
+
+  // ---- 0. proof by one occluder per sub-cone (exact, used after the first packet) ----
+  // The segments from a convex region piece R (at the height) to a convex part T of the inset
+  // target fill conv(R ∪ T); where R lies strictly in front of a blocker's plane and T strictly
+  // behind, they cross that plane inside conv of the crossings of the vertex-to-vertex segments.
+  // So when those crossings all lie inside the blocker's outline (by a margin), every sampled ray
+  // would be blocked by its front side: the fragment is hidden from R with no further rays. The
+  // candidate blockers are those met by a ray from R's centroid to T's centroid; where none
+  // covers, the larger of R and T is halved and each half proved alone, within a ray budget.
+  // Returns 1 proved hidden, 2 a ray was unblocked (visible), 0 neither.
+  auto covers = [&](uint32_t o, std::span<const glm::dvec2> rp, std::span<const glm::dvec2> tq) -> bool {
+    const Plane& op = s.outline_plane[o];
+    const uint32_t of = s.outline_first[o], oc = s.outline_first[o + 1] - of;
+    if (oc < 3) return false;
+    // The margin: the minimum gap, 16 times the single-precision rounding of Embree's
+    // coordinates, so that a crossing proved inside is inside the float triangles too (and below
+    // the region's shrink, so that a room's own wall can cover eyes near it).
+    const double margin = min_gap;
+    for (const auto& r : rp)
+      if (!(glm::dot(op.n, eyeAt(r)) - op.d > margin)) return false;
+    for (const auto& t : tq)
+      if (!(glm::dot(op.n, target3(t)) - op.d < -margin)) return false;
+    glm::dvec3 ou, ow;
+    planeBasis(op.n, ou, ow);
+    const glm::dvec3 obase = op.n * op.d;
+    const glm::dvec2* ov = s.outline_2d.data() + of;
+    for (const auto& r : rp) {
+      const glm::dvec3 r3 = eyeAt(r);
+      const double dr = glm::dot(op.n, r3) - op.d;
+      for (const auto& t : tq) {
+        const glm::dvec3 t3 = target3(t);
+        const double dt = glm::dot(op.n, t3) - op.d;
+        const glm::dvec3 x = r3 + (dr / (dr - dt)) * (t3 - r3) - obase;
+        const glm::dvec2 q{glm::dot(x, ou), glm::dot(x, ow)};
+        for (uint32_t k = 0; k < oc; ++k) {
+          const glm::dvec2 a = ov[k], ab = ov[(k + 1) % oc] - a;
+          const double len = glm::length(ab);
+          if (!(cross2(ab, q - a) >= margin * len)) return false;
+        }
+      }
+    }
+    return true;
+  };
+  auto proveHidden = [&]() -> int {
+    sc.pool.clear();
+    sc.items.clear();
+    const uint32_t t_first = 0, t_count = static_cast<uint32_t>(sc.target2.size());
+    sc.pool.insert(sc.pool.end(), sc.target2.begin(), sc.target2.end());
+    // Only the part of each piece in front of the target (by the minimum gap) casts rays.
+    const glm::dvec2 g{tp.n.x, tp.n.z};
+    const double c0 = tp.n.y * height - tp.d - min_gap;
+    for (const auto& piece : sc.pieces) {
+      if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
+      // Shrunk by half the samples' inset: region edges usually lie on walls, and an eye on a
+      // wall's plane (or at a room's corner) crosses it nowhere inside its outline. The eyes
+      // given up are the sliver the samples' own inset already gives up.
+      bool empty = false;
+      sc.poly = sc.clip;
+      for (size_t k = 0; k < sc.poly.size() && !empty; ++k) {
+        const glm::dvec2 a = sc.poly[k], ab = sc.poly[(k + 1) % sc.poly.size()] - a;
+        const double len = glm::length(ab);
+        if (!(len > 0.0)) continue;
+        const glm::dvec2 inward = glm::dvec2(-ab.y, ab.x) / len;
+        if (!clipHalfPlane(sc.clip, inward, -glm::dot(inward, a) - 0.5 * region_inset, sc.poly2)) empty = true;
+        else sc.clip.swap(sc.poly2);
+      }
+      if (empty) continue;
+      const uint32_t first = static_cast<uint32_t>(sc.pool.size());
+      sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
+      sc.items.push_back({first, static_cast<uint32_t>(sc.clip.size()), t_first, t_count, 0});
+    }
+    uint32_t budget = opt.proof_rays;
+    auto centroidOf = [&](uint32_t first, uint32_t count) {
+      glm::dvec2 c{0.0};
+      for (uint32_t k = 0; k < count; ++k) c += sc.pool[first + k];
+      return c / static_cast<double>(count);
+    };
+    // Halves the polygon pool[first, +count) across its longest vertex-to-vertex direction; the
+    // halves are appended to the pool. False when it cannot be split.
+    auto halve = [&](uint32_t first, uint32_t count, uint32_t out[4]) -> bool {
+      glm::dvec2 axis{0.0};
+      double best = 0.0;
+      for (uint32_t a = 0; a < count; ++a)
+        for (uint32_t b = a + 1; b < count; ++b) {
+          const glm::dvec2 d = sc.pool[first + b] - sc.pool[first + a];
+          if (glm::dot(d, d) > best) best = glm::dot(d, d), axis = d;
+        }
+      if (!(best > 0.0)) return false;
+      const glm::dvec2 c = centroidOf(first, count);
+      sc.poly.assign(sc.pool.begin() + first, sc.pool.begin() + first + count);
+      for (int side = 0; side < 2; ++side) {
+        const glm::dvec2 gs = side == 0 ? axis : -axis;
+        if (!clipHalfPlane(sc.poly, gs, -glm::dot(gs, c), sc.clip)) return false;
+        out[2 * side] = static_cast<uint32_t>(sc.pool.size());
+        out[2 * side + 1] = static_cast<uint32_t>(sc.clip.size());
+        sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
+      }
+      return true;
+    };
+    while (!sc.items.empty()) {
+      const ProofItem it = sc.items.back();
+      sc.items.pop_back();
+      const std::span<const glm::dvec2> rp(sc.pool.data() + it.region_first, it.region_count);
+      const std::span<const glm::dvec2> tq(sc.pool.data() + it.target_first, it.target_count);
+      const glm::dvec3 e = eyeAt(centroidOf(it.region_first, it.region_count));
+      const glm::dvec3 p = target3(centroidOf(it.target_first, it.target_count));
+      bool covered = false;
+      double tnear = 0.0;
+      uint32_t last_outline = UINT32_MAX;
+      for (uint32_t hits = 0; hits < kProofHits && budget > 0 && !covered; ++hits) {
+        Hit hit;
+        const int r = castClear(e, p, &hit, tnear);
+        if (r < 0) return 0;
+        --budget;
+        if (r == 1) return hits == 0 ? 2 : 0;  // past the first blocker: not a sampled ray
+        const uint32_t o = s.fragment_outline[hit.fragment];
+        // The next blocker along the same ray: a relative step past this hit, 1e-6 of the ray,
+        // far above float rounding of t and far below any wall's thickness along it.
+        tnear = hit.t + 1e-6;
+        if (o == last_outline) continue;
+        last_outline = o;
+        covered = covers(o, rp, tq);
+      }
+      if (covered) continue;
+      if (it.depth >= kMaxProofDepth || budget == 0) return 0;
+      // Halve whichever of R and T is larger, in scene units.
+      auto diameter2 = [&](std::span<const glm::dvec2> v) {
+        double d = 0.0;
+        for (size_t a = 0; a < v.size(); ++a)
+          for (size_t b = a + 1; b < v.size(); ++b) d = std::max(d, glm::dot(v[b] - v[a], v[b] - v[a]));
+        return d;
+      };
+      const bool split_region = diameter2(rp) >= diameter2(tq);
+      uint32_t halves[4];
+      if (!halve(split_region ? it.region_first : it.target_first, split_region ? it.region_count : it.target_count,
+                 halves))
+        return 0;
+      for (int k = 1; k >= 0; --k) {
+        ProofItem child = it;
+        child.depth = it.depth + 1;
+        if (split_region) child.region_first = halves[2 * k], child.region_count = halves[2 * k + 1];
+        else child.target_first = halves[2 * k], child.target_count = halves[2 * k + 1];
+        sc.items.push_back(child);
+      }
+    }
+    return 1;
   };
 
   // ---- 1. uniform samples ----
@@ -580,14 +803,45 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
   }
   const uint32_t ne = static_cast<uint32_t>(sc.eyes.size()), nt = static_cast<uint32_t>(sc.targets.size());
   // Diagonal order: block b pairs eye i with target (b + i) mod nt, so every pair comes once and
-  // the first block already uses every eye.
-  for (uint64_t k = 0; k < static_cast<uint64_t>(ne) * nt; ++k) {
-    const uint32_t i = static_cast<uint32_t>(k % ne);
-    const uint32_t j = static_cast<uint32_t>((k / ne + i) % nt);
-    if (castClear(sc.eyes[i], sc.targets[j], nullptr) == 1) {
+  // the first block already uses every eye. Rays go in packets of Impl::kPacket (the answer does
+  // not depend on the packet size: any unblocked ray keeps the fragment).
+  const uint64_t pairs = static_cast<uint64_t>(ne) * nt;
+  uint64_t next_pair = 0;
+  // Casts packets until `packets` were cast or the pairs run out; true when a ray was unblocked.
+  auto uniformPackets = [&](uint64_t packets) -> bool {
+    glm::dvec3 pe[Impl::kPacket], pt[Impl::kPacket];
+    double pf[Impl::kPacket];
+    for (uint64_t cast = 0; cast < packets && next_pair < pairs; ++cast) {
+      int n = 0;
+      for (; next_pair < pairs && n < Impl::kPacket; ++next_pair) {
+        const uint32_t i = static_cast<uint32_t>(next_pair % ne);
+        const uint32_t j = static_cast<uint32_t>((next_pair / ne + i) % nt);
+        const double tfar = rayEnd(sc.eyes[i], sc.targets[j]);
+        if (!(tfar > 0.0)) continue;
+        pe[n] = sc.eyes[i], pt[n] = sc.targets[j], pf[n] = tfar;
+        ++n;
+      }
+      if (n == 0) break;
+      counters.rays += static_cast<uint64_t>(n);
+      if (s.anyClear16(pe, pt, pf, n)) return true;
+    }
+    return false;
+  };
+  if (uniformPackets(1)) {
+    ++counters.visible;
+    return true;
+  }
+  if (opt.proof_rays > 0) {
+    const int proof = proveHidden();
+    if (proof == 2) {
       ++counters.visible;
       return true;
     }
+    if (proof == 1) return false;
+  }
+  if (uniformPackets(std::numeric_limits<uint64_t>::max())) {
+    ++counters.visible;
+    return true;
   }
 
   // ---- 2. refinement: step past the edges of the nearest blockers ----
@@ -600,35 +854,100 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     for (uint32_t k = 0; k < seeds; ++k) {
       const uint32_t i = k % ne;
       const uint32_t j = static_cast<uint32_t>((k / ne + k * 7 + 3) % nt);
-      sc.queue.push_back({sc.eyes[i], sc.targets[j], 0, 0, k});
+      Probe seed;
+      seed.eye = sc.eyes[i], seed.target = sc.targets[j], seed.order = k;
+      sc.queue.push_back(seed);
     }
     std::make_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
   }
   uint32_t pushed = static_cast<uint32_t>(sc.queue.size());
-  auto push = [&](const glm::dvec3& e, const glm::dvec3& p, uint32_t depth, uint32_t key) {
-    sc.queue.push_back({e, p, depth, key, pushed++});
-    std::push_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
+  sc.parents.clear();
+  // A step's ray is worked out only when it comes off the queue (most never do: the budget runs
+  // out first); the order of the queue is the same as if each were worked out when pushed, and a
+  // step that yields no ray is dropped then, as it would have been.
+  auto stepRay = [&](const StepParent& pa, uint32_t k, uint32_t variant, glm::dvec3& e_out,
+                     glm::dvec3& p_out) -> bool {
+    const uint32_t of = s.outline_first[pa.outline], oc = s.outline_first[pa.outline + 1] - of;
+    const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
+    const glm::dvec3 edge = b - a;
+    const double el = glm::length(edge);
+    if (!(el > 0.0)) return false;
+    const glm::dvec3 dir = pa.target - pa.eye;
+    const double margin = std::max(end_gap, kStepMargin * pa.hit_t * glm::length(dir));
+    // Outline counter-clockwise seen from the blocker's front: outside is to the edge's right.
+    const glm::dvec3 out = glm::normalize(glm::cross(edge, pa.blocker_normal));
+    const glm::dvec3 xp = closestOnSegment(a, b, pa.x) + margin * out;
+    if (variant == 0) {
+      // (a) Keep the eye, move the target point: the eye and the edge span a plane; target
+      // points on xp's side of it (by the margin scaled to the target's distance) are seen past
+      // the edge. The nearest such point of the inset target to the current one.
+      const glm::dvec3 m3 = glm::cross(edge, a - pa.eye);
+      const double ml = glm::length(m3);
+      if (!(ml > 0.0)) return false;
+      const glm::dvec3 mn = m3 / ml;
+      const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
+      const double offset = margin * glm::length(dir) / std::max(pa.hit_t * glm::length(dir), end_gap);
+      const glm::dvec2 g = sgn * glm::dvec2(glm::dot(mn, tu), glm::dot(mn, tw));
+      const double c0 = sgn * glm::dot(mn, tbase - a) - offset;  // keep g·q + c0 >= 0
+      if (!clipHalfPlane(sc.target2, g, c0, sc.clip)) return false;
+      double d2c;
+      const glm::dvec3 q = pa.target - tbase;
+      const glm::dvec2 q2 = closestInConvex(sc.clip, {glm::dot(q, tu), glm::dot(q, tw)}, d2c);
+      const glm::dvec3 p2 = target3(q2);
+      if (!(glm::length(p2 - pa.target) > end_gap)) return false;
+      e_out = pa.eye, p_out = p2;
+      return true;
+    }
+    // (b) Keep the target point, move the eye: the same with the plane through the target point
+    // and the edge, cut with the height plane; the nearest such point of the region.
+    const glm::dvec3 m3 = glm::cross(edge, a - pa.target);
+    const double ml = glm::length(m3);
+    if (!(ml > 0.0)) return false;
+    const glm::dvec3 mn = m3 / ml;
+    const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
+    const double to_hit = std::max((1.0 - pa.hit_t) * glm::length(dir), end_gap);
+    const double offset = margin * glm::length(dir) / to_hit;
+    const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
+    const double c0 = sgn * (mn.y * (height - a.y) - mn.x * a.x - mn.z * a.z) - offset;
+    double best = std::numeric_limits<double>::infinity();
+    glm::dvec2 e2{0.0};
+    for (const auto& piece : sc.pieces) {
+      if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
+      double d2c;
+      const glm::dvec2 c = closestInConvex(sc.clip, {pa.eye.x, pa.eye.z}, d2c);
+      if (d2c < best) {
+        best = d2c;
+        e2 = pullTowards(c, piece.centroid, 0.0, region_inset);
+      }
+    }
+    if (!(best < std::numeric_limits<double>::infinity())) return false;
+    const glm::dvec3 e3 = eyeAt(e2);
+    if (!(glm::length(e3 - pa.eye) > end_gap)) return false;
+    e_out = e3, p_out = pa.target;
+    return true;
   };
   uint32_t budget = opt.refine_rays;
   while (!sc.queue.empty() && budget > 0) {
     std::pop_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
     const Probe pr = sc.queue.back();
     sc.queue.pop_back();
+    glm::dvec3 eye = pr.eye, target = pr.target;
+    if (pr.parent != Probe::kNoParent &&
+        !stepRay(sc.parents[pr.parent], pr.edge, pr.variant, eye, target))
+      continue;
     Hit hit;
-    const int r = castClear(pr.eye, pr.target, &hit);
+    const int r = castClear(eye, target, &hit);
     if (r < 0) continue;
     --budget;
     if (r == 1) {
       ++counters.visible;
       return true;
     }
-    const glm::dvec3 dir = pr.target - pr.eye;
-    const glm::dvec3 x = pr.eye + hit.t * dir;
-    if (pr.depth >= kMaxStepDepth) continue;
+    if (pr.depth >= kMaxStepDepth || budget == 0) continue;
+    const glm::dvec3 x = eye + hit.t * (target - eye);
     const uint32_t o = s.fragment_outline[hit.fragment];
     const uint32_t of = s.outline_first[o], oc = s.outline_first[o + 1] - of;
     if (oc < 3) continue;
-    const glm::dvec3 bn = s.fragments[hit.fragment].plane.n;
     sc.edge_order.clear();
     for (uint32_t k = 0; k < oc; ++k) {
       const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
@@ -636,68 +955,20 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       sc.edge_order.push_back({glm::dot(q - x, q - x), k});
     }
     std::sort(sc.edge_order.begin(), sc.edge_order.end());
-    const double margin = std::max(end_gap, kStepMargin * hit.t * glm::length(dir));
-    for (uint32_t m = 0; m < oc; ++m) {
-      const uint32_t k = sc.edge_order[m].second;
-      const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
-      const glm::dvec3 edge = b - a;
-      const double el = glm::length(edge);
-      if (!(el > 0.0)) continue;
-      // Outline counter-clockwise seen from the blocker's front: outside is to the edge's right.
-      const glm::dvec3 out = glm::normalize(glm::cross(edge, bn));
-      const glm::dvec3 xp = closestOnSegment(a, b, x) + margin * out;
-      // (a) Keep the eye, move the target point: the eye and the edge span a plane; target
-      // points on xp's side of it (by the margin scaled to the target's distance) are seen past
-      // the edge. The nearest such point of the inset target to the current one.
-      {
-        const glm::dvec3 m3 = glm::cross(edge, a - pr.eye);
-        const double ml = glm::length(m3);
-        if (ml > 0.0) {
-          const glm::dvec3 mn = m3 / ml;
-          const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
-          const double offset = margin * glm::length(dir) / std::max(hit.t * glm::length(dir), end_gap);
-          const glm::dvec2 g = sgn * glm::dvec2(glm::dot(mn, tu), glm::dot(mn, tw));
-          const double c0 = sgn * glm::dot(mn, tbase - a) - offset;  // keep g·q + c0 >= 0
-          if (clipHalfPlane(sc.target2, g, c0, sc.clip)) {
-            double d2c;
-            const glm::dvec3 t3 = tbase;
-            const glm::dvec3 q = pr.target - t3;
-            const glm::dvec2 q2 = closestInConvex(sc.clip, {glm::dot(q, tu), glm::dot(q, tw)}, d2c);
-            const glm::dvec3 p2 = target3(q2);
-            if (glm::length(p2 - pr.target) > end_gap) push(pr.eye, p2, pr.depth + 1, pr.key + 1);
-          }
-        }
+    const uint32_t parent = static_cast<uint32_t>(sc.parents.size());
+    sc.parents.push_back({eye, target, x, hit.t, o, s.fragments[hit.fragment].plane.n});
+    for (uint32_t m = 0; m < oc; ++m)
+      for (uint32_t variant = 0; variant < 2; ++variant) {
+        Probe child;
+        child.depth = pr.depth + 1;
+        child.key = pr.key + 1;
+        child.order = pushed++;
+        child.parent = parent;
+        child.edge = sc.edge_order[m].second;
+        child.variant = variant;
+        sc.queue.push_back(child);
+        std::push_heap(sc.queue.begin(), sc.queue.end(), std::greater<>());
       }
-      // (b) Keep the target point, move the eye: the same with the plane through the target point
-      // and the edge, cut with the height plane; the nearest such point of the region.
-      {
-        const glm::dvec3 m3 = glm::cross(edge, a - pr.target);
-        const double ml = glm::length(m3);
-        if (ml > 0.0) {
-          const glm::dvec3 mn = m3 / ml;
-          const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
-          const double to_hit = std::max((1.0 - hit.t) * glm::length(dir), end_gap);
-          const double offset = margin * glm::length(dir) / to_hit;
-          const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
-          const double c0 = sgn * (mn.y * (height - a.y) - mn.x * a.x - mn.z * a.z) - offset;
-          double best = std::numeric_limits<double>::infinity();
-          glm::dvec2 e2{0.0};
-          for (const auto& piece : sc.pieces) {
-            if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
-            double d2c;
-            const glm::dvec2 c = closestInConvex(sc.clip, {pr.eye.x, pr.eye.z}, d2c);
-            if (d2c < best) {
-              best = d2c;
-              e2 = pullTowards(c, piece.centroid, 0.0, region_inset);
-            }
-          }
-          if (best < std::numeric_limits<double>::infinity()) {
-            const glm::dvec3 e3 = eyeAt(e2);
-            if (glm::length(e3 - pr.eye) > end_gap) push(e3, pr.target, pr.depth + 1, pr.key + 1);
-          }
-        }
-      }
-    }
   }
   return false;
 }

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -24,10 +25,18 @@
 namespace walkvis {
 
 struct VisibilityOptions {
-  uint32_t region_samples = 64;   // points on the region per test (stratified by area, plus its boundary)
-  uint32_t polygon_samples = 16;  // points on the fragment per test, inset from its edges
-  uint32_t refine_rays = 1024;    // extra rays spent where visibility changes (0: uniform sampling only)
+  // Defaults from the speed-against-error sweep of `walkvis bench hfd` on freedoom2 MAP30
+  // (16,8,256: pixel error 8.9e-6 at 100 eyes per level, 64 px faces; 64,16,1024 gave 6.7e-6 at
+  // several times the build time; 16,8,128 was as accurate on MAP30 but breaks the sub-region
+  // monotonicity test): refinement buys far more accuracy per ray than uniform samples.
+  uint32_t region_samples = 16;  // points on the region per test (stratified by area, plus its boundary)
+  uint32_t polygon_samples = 8;  // points on the fragment per test, inset from its edges
+  uint32_t refine_rays = 256;    // extra rays spent where visibility changes (0: uniform sampling only)
   uint64_t seed = 1;
+  // Rays at most spent per test trying to prove the fragment hidden outright (every sub-cone of
+  // region-to-fragment segments crossing one blocker's outline; exact, so it never loses a visible
+  // fragment), after the first packet of uniform rays; 0: off. Not stored in tree files.
+  uint32_t proof_rays = 64;
 };
 
 struct VisibilityCounters {
@@ -57,6 +66,10 @@ class VisibilityScene {
                          VisibilityCounters& counters) const;
 
   const VisibilityOptions& options() const;
+
+  // One line on the Embree build in use: version and which ray packet widths it runs natively
+  // (the queries cast packets of 16; a width that is not native is emulated, slower).
+  std::string deviceInfo() const;
 
   // True when the segment from `from` to `to` meets the front side of some fragment (the same
   // blockers and intersection filter as the queries; no end gap). For throughput benchmarks.

@@ -23,6 +23,8 @@
 #include <thread>
 #include <vector>
 
+#include <tbb/global_control.h>
+
 #include "bsp/bsp.h"
 #include "commands.h"
 #include "pfd_hfd/pfd.h"
@@ -137,6 +139,7 @@ int runRaysBench(const RaysArgs& args) {
   const BspTree bsp = buildBsp(scene);
   const VisibilityScene vis = VisibilityScene::build(bsp);
   const RayRate r = measureRays(scene, bsp, vis, args.rays);
+  std::printf("%s\n", vis.deviceInfo().c_str());
   std::printf("%s: %zu fragments, %llu random eye-to-fragment segments (%.1f%% occluded)\n", scene.name.c_str(),
               bsp.fragments.size(), static_cast<unsigned long long>(args.rays), 100.0 * r.occluded_fraction);
   std::printf("occlusion rays/s: 1 thread %.3g, 2 threads %.3g (speed-up %.2f)\n", r.rays_per_second_1,
@@ -151,6 +154,8 @@ struct HfdBenchArgs {
   std::vector<uint32_t> region_samples{16, 32, 64};
   std::vector<uint32_t> polygon_samples{4, 8, 16};
   std::vector<uint32_t> refine_rays{0, 1024};
+  std::vector<uint32_t> proof_rays{VisibilityOptions{}.proof_rays};
+  int threads = 0;  // 0: TBB's default
   uint32_t views = 50;
   int res = 64;
   uint32_t max_levels = 0;  // 0: all
@@ -244,6 +249,12 @@ void drawPlot(const std::vector<HfdPoint>& points, const std::string& path) {
 }
 
 int runHfdBench(const HfdBenchArgs& args) {
+  // The build's threads (TBB) for the parallel speed-up; bench rays' own 1- and 2-thread figures
+  // use plain threads and are not limited by it.
+  std::unique_ptr<tbb::global_control> limit;
+  if (args.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  static_cast<size_t>(args.threads));
   const auto t_all = std::chrono::steady_clock::now();
   const Scene scene = loadScene(args.scene.scene, args.scene.loadOptions());
   const BspTree bsp = buildBsp(scene);
@@ -260,7 +271,8 @@ int runHfdBench(const HfdBenchArgs& args) {
   bool stopped = false;
   for (uint32_t rs : args.region_samples)
     for (uint32_t ps : args.polygon_samples)
-      for (uint32_t rr : args.refine_rays) {
+      for (uint32_t rr : args.refine_rays)
+      for (uint32_t pr : args.proof_rays) {
         if (secondsSince(t_all) > args.max_seconds) {
           stopped = true;
           continue;
@@ -269,6 +281,7 @@ int runHfdBench(const HfdBenchArgs& args) {
         pt.vis.region_samples = rs;
         pt.vis.polygon_samples = ps;
         pt.vis.refine_rays = rr;
+        pt.vis.proof_rays = pr;
         const auto t0 = std::chrono::steady_clock::now();
         const VisibilityScene vis = VisibilityScene::build(bsp, pt.vis);
         TreeFile file;
@@ -295,9 +308,9 @@ int runHfdBench(const HfdBenchArgs& args) {
         so.res = args.res;
         pt.stats = computeHfdStats(file, so).overall;
         std::fprintf(stderr,
-                     "  %zu: region %u polygon %u refine %u: build %.2f s, %llu rays (%.3g/s), %llu bytes, listed %.1f, "
+                     "  %zu: region %u polygon %u refine %u proof %u: build %.2f s, %llu rays (%.3g/s), %llu bytes, listed %.1f, "
                      "pixel error %.3g, missed %.3f (%.1f%% of eyes)\n",
-                     points.size() + 1, rs, ps, rr, pt.build_seconds, static_cast<unsigned long long>(pt.rays),
+                     points.size() + 1, rs, ps, rr, pr, pt.build_seconds, static_cast<unsigned long long>(pt.rays),
                      pt.rays / std::max(pt.build_seconds, 1e-9), static_cast<unsigned long long>(pt.bytes),
                      pt.stats.listed_mean, pt.stats.pixel_error_ratio, pt.stats.missed_mean,
                      100.0 * pt.stats.eyes_with_miss);
@@ -305,25 +318,27 @@ int runHfdBench(const HfdBenchArgs& args) {
       }
   std::ofstream csv(args.csv);
   if (!csv) throw SceneError(args.csv + ": cannot write");
-  csv << "point,scene,region_samples,polygon_samples,refine_rays,build_seconds,vis_tests,rays,rays_per_second,"
-         "ray_rate_fraction_1thread,rejected,tree_bytes,listed_mean,visible_mean,missed_mean,missed_max,"
+  csv << "point,scene,region_samples,polygon_samples,refine_rays,proof_rays,threads,build_seconds,vis_tests,rays,"
+         "rays_per_second,ray_rate_fraction_1thread,ray_rate_fraction_2threads,rejected,tree_bytes,listed_mean,visible_mean,missed_mean,missed_max,"
          "eyes_with_miss,pixel_error_ratio,pixel_error_ratio_max,rejection_ratio,overestimation,eyes,res\n";
   std::printf("%s: %zu fragments, %u levels; Embree occlusion rays/s: %.3g (1 thread), %.3g (2 threads)\n",
               scene.name.c_str(), bsp.fragments.size(), levels, rate.rays_per_second_1, rate.rays_per_second_2);
-  std::printf("%3s %6s %6s %6s %9s %11s %8s %11s %9s %10s %9s %6s %6s\n", "pt", "region", "poly", "refine",
-              "build_s", "rays", "rate%1t", "bytes", "listed", "pixel_err", "missed", "miss%", "overest");
+  std::printf("%3s %6s %6s %6s %5s %9s %11s %8s %8s %11s %9s %10s %9s %6s %6s\n", "pt", "region", "poly", "refine",
+              "proof", "build_s", "rays", "rate%1t", "rate%2t", "bytes", "listed", "pixel_err", "missed", "miss%", "overest");
   for (size_t i = 0; i < points.size(); ++i) {
     const HfdPoint& p = points[i];
     const double rps = p.rays / std::max(p.build_seconds, 1e-9);
     csv << i + 1 << ',' << scene.name << ',' << p.vis.region_samples << ',' << p.vis.polygon_samples << ','
-        << p.vis.refine_rays << ',' << p.build_seconds << ',' << p.tests << ',' << p.rays << ',' << rps << ','
-        << rps / rate.rays_per_second_1 << ',' << p.rejected << ',' << p.bytes << ',' << p.stats.listed_mean << ','
+        << p.vis.refine_rays << ',' << p.vis.proof_rays << ',' << args.threads << ',' << p.build_seconds << ','
+        << p.tests << ',' << p.rays << ',' << rps << ',' << rps / rate.rays_per_second_1 << ','
+        << rps / rate.rays_per_second_2 << ',' << p.rejected << ',' << p.bytes << ',' << p.stats.listed_mean << ','
         << p.stats.visible_mean << ',' << p.stats.missed_mean << ',' << p.stats.missed_max << ','
         << p.stats.eyes_with_miss << ',' << p.stats.pixel_error_ratio << ',' << p.stats.pixel_error_ratio_max << ','
         << p.stats.rejection_ratio << ',' << p.stats.overestimation << ',' << p.stats.eyes << ',' << args.res << '\n';
-    std::printf("%3zu %6u %6u %6u %9.2f %11llu %7.1f%% %11llu %9.1f %10.3g %9.3f %5.1f%% %6.2f\n", i + 1,
-                p.vis.region_samples, p.vis.polygon_samples, p.vis.refine_rays, p.build_seconds,
+    std::printf("%3zu %6u %6u %6u %5u %9.2f %11llu %7.1f%% %7.1f%% %11llu %9.1f %10.3g %9.3f %5.1f%% %6.2f\n", i + 1,
+                p.vis.region_samples, p.vis.polygon_samples, p.vis.refine_rays, p.vis.proof_rays, p.build_seconds,
                 static_cast<unsigned long long>(p.rays), 100.0 * rps / rate.rays_per_second_1,
+                100.0 * rps / rate.rays_per_second_2,
                 static_cast<unsigned long long>(p.bytes), p.stats.listed_mean, p.stats.pixel_error_ratio,
                 p.stats.missed_mean, 100.0 * p.stats.eyes_with_miss, p.stats.overestimation);
   }
@@ -344,6 +359,9 @@ void addBenchHfd(CLI::App& bench, CommandRunner& runner) {
     sub->add_option("--region-samples", args->region_samples, "Region samples per test (list)")->delimiter(',');
     sub->add_option("--polygon-samples", args->polygon_samples, "Polygon samples per test (list)")->delimiter(',');
     sub->add_option("--refine-rays", args->refine_rays, "Refinement rays per test (list)")->delimiter(',');
+    sub->add_option("--proof-rays", args->proof_rays, "Rays per test spent proving it hidden (list; 0: off)")
+        ->delimiter(',');
+    sub->add_option("--threads", args->threads, "Build threads (0: TBB's default)")->check(CLI::Range(0, 256));
     sub->add_option("--views", args->views, "Stats eyes per level")->check(CLI::Range(1u, 100000u));
     sub->add_option("--res", args->res, "Stats cube face pixels per side")->check(CLI::Range(1, 4096));
     sub->add_option("--max-levels", args->max_levels, "Only the first K levels (0: all)");

@@ -58,8 +58,9 @@ std::string_view backfaceMethodName(BackfaceMethod method);
 BackfaceMethod parseBackfaceMethod(std::string_view name);
 
 struct BackfaceOptions {
-  // mask: cells per cube-face side (the paper's N; 6·N² <= 2048 clusters, so N in [1, 18]).
-  int mask_resolution = 16;
+  // mask: cells per cube-face side (the paper's N; 6·N² <= 2048 clusters, so N in [1, 18]);
+  // 0 = chosen from the polygon count (maskResolutionFor in normal_mask.h).
+  int mask_resolution = 0;
   // mask: polygons per spatial group, each with its own view cone (paper §3.2); 0 = one group.
   uint32_t mask_group_size = 0;
   // mask: true = the paper's §3.1 cone (view_dir, fov) for every group. That is conservative only

@@ -210,7 +210,7 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
       break;
     }
     case ListCullMethod::kMask: {
-      impl->grid = std::make_unique<NormalMaskGrid>(options.mask_resolution);
+      impl->grid = std::make_unique<NormalMaskGrid>(maskResolutionFor(n, options.mask_resolution));
       impl->cell.resize(n);
       for (size_t i = 0; i < n; ++i) impl->cell[i] = impl->grid->cell(input.polygons[indices[i]].plane.n);
       std::vector<uint8_t> plane_at(n, 0);

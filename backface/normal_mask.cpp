@@ -59,6 +59,13 @@ constexpr std::array<uint64_t, 256> makeSpread() {
 constexpr std::array<uint64_t, 256> kSpread = makeSpread();
 }  // namespace
 
+int maskResolutionFor(size_t polygons, int requested) {
+  if (requested != 0) return requested;
+  int n = 4;
+  while (n < 16 && 6.0 * (n + 1) * (n + 1) <= static_cast<double>(polygons) / 5.0) ++n;
+  return n;
+}
+
 NormalMaskGrid::NormalMaskGrid(int n) : n_(n) {
   if (n_ < 1 || n_ > kMaxResolution) {
     throw SceneError("backface mask: mask_resolution must be in [1, 18], got " + std::to_string(n_));
@@ -232,7 +239,7 @@ struct Group {
 class NormalMaskCuller final : public BackfaceCuller {
  public:
   NormalMaskCuller(const BackfaceInput& input, const BackfaceOptions& options)
-      : grid_(options.mask_resolution), use_view_cone_(options.mask_use_view_cone) {
+      : grid_(maskResolutionFor(input.polygons.size(), options.mask_resolution)), use_view_cone_(options.mask_use_view_cone) {
     const size_t count = input.polygons.size();
     polygon_count_ = count;
 

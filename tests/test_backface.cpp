@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "backface/backface.h"
+#include "backface/normal_mask.h"
 #include "backface_test_util.h"
 #include "scenes/scene.h"
 
@@ -314,4 +315,21 @@ TEST(Backface, EmptyInputAndBadOptions) {
 }
 
 }  // namespace
+}  // namespace walkvis
+
+namespace walkvis {
+TEST(Backface, MaskResolutionFollowsThePolygonCount) {
+  EXPECT_EQ(maskResolutionFor(10, 0), 4);
+  EXPECT_EQ(maskResolutionFor(2000, 0), 8);
+  EXPECT_EQ(maskResolutionFor(1882, 0), 7);
+  EXPECT_EQ(maskResolutionFor(70000, 0), 16);
+  EXPECT_EQ(maskResolutionFor(2000, 12), 12);
+  int last = 0;
+  for (size_t polygons = 0; polygons < 200000; polygons = polygons * 3 / 2 + 1) {
+    const int n = maskResolutionFor(polygons, 0);
+    EXPECT_GE(n, last);
+    EXPECT_TRUE(n == 4 || 6.0 * n * n <= polygons / 5.0) << polygons;
+    last = n;
+  }
+}
 }  // namespace walkvis

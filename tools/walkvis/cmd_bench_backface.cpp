@@ -63,7 +63,7 @@ struct BackfaceBenchArgs {
   int runs = 5;
   uint64_t seed = 1;
   double tr = 1.0;
-  int mask_resolution = 16;
+  int mask_resolution = 0;
   uint32_t mask_group = 256;
   bool json = false;
   bool subdivision = false;
@@ -630,7 +630,7 @@ void addBenchBackface(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--runs", args->runs, "Timed passes over the eyes; the median is reported")->check(CLI::Range(1, 1000));
   sub->add_option("--seed", args->seed, "Seed of the eyes");
   sub->add_option("--tr", args->tr, "Johannsen-Carter T/R (cluster test time over vertex time)")->check(CLI::NonNegativeNumber);
-  sub->add_option("--mask-n", args->mask_resolution, "Normal-mask cells per cube-face side")->check(CLI::Range(1, 18));
+  sub->add_option("--mask-n", args->mask_resolution, "Normal-mask cells per cube-face side (0: from the polygon count)")->check(CLI::Range(0, 18));
   sub->add_option("--mask-group", args->mask_group, "Polygons per view-cone group of mask-groups")->check(CLI::Range(1u, 1u << 30));
   sub->add_option("--bunny", args->bunny, "The bunny OBJ (default: where scripts/fetch-bunny puts it; skipped when missing)");
   sub->add_flag("--no-bunny", args->no_bunny, "Leave the bunny out");

@@ -174,9 +174,11 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
         while (first < order.size() && first < ref.size() && order[first] == ref[first]) ++first;
         std::fprintf(stderr,
                      "mismatch: level %u cell %td eye (%.17g, %.17g, %.17g): tree %zu ids, coherent %s, bsp %zu ids, "
-                     "first difference at position %zu\n",
+                     "first difference at position %zu (tree: fragment %s, bsp: fragment %s)\n",
                      level.level, tree - level.cells.data(), eye.x, eye.y, eye.z, order.size(),
-                     ok_coherent ? "same" : "DIFFERENT", ref.size(), first);
+                     ok_coherent ? "same" : "DIFFERENT", ref.size(), first,
+                     first < order.size() ? std::to_string(order[first]).c_str() : "none",
+                     first < ref.size() ? std::to_string(ref[first]).c_str() : "none");
       }
     }
     lj["eyes"] = args.compare_bsp;

@@ -57,8 +57,21 @@ struct Line {
 
 Corner makeCorner(const FT& x, const FT& z) {
   Corner k{x, z};
-  const auto ix = CGAL::to_interval(x);
-  const auto iz = CGAL::to_interval(z);
+  // A lazy exact number's interval can be unbounded where its construction divided by an interval
+  // holding 0 (the intersection of two nearly parallel lines): its midpoint is then NaN, and boxes
+  // built from it silently leave the corner out (freedoom2 MAP01 level 46: a piece decided to lie
+  // on one side of a line it crosses, so a fragment was missing from the order). Computing the
+  // exact value once makes the interval tight.
+  auto ix = CGAL::to_interval(x);
+  auto iz = CGAL::to_interval(z);
+  if (!std::isfinite(ix.first) || !std::isfinite(ix.second)) {
+    x.exact();
+    ix = CGAL::to_interval(x);
+  }
+  if (!std::isfinite(iz.first) || !std::isfinite(iz.second)) {
+    z.exact();
+    iz = CGAL::to_interval(z);
+  }
   k.ax = 0.5 * (ix.first + ix.second);
   k.az = 0.5 * (iz.first + iz.second);
   // The radius of the interval around the midpoint, rounded up by a relative 1e-15 (the

@@ -135,5 +135,42 @@ TEST(PfdProperty, Office32Rooms) { checkScene("gen:office?rooms=32", 3000, 3000,
 TEST(PfdProperty, FreedoomMap07) { checkScene("freedoom2.wad:MAP07", 3000, 200, 4ull << 20); }
 TEST(PfdProperty, FreedoomMap17) { checkScene("freedoom2.wad:MAP17", 3000, 100, 4ull << 20); }
 
+
+// freedoom2 MAP01, level 46 (floor y = 176), around (592..602, -1345..-1332): two nearly parallel
+// test-lines made a region corner whose lazy-exact interval was unbounded (NaN midpoint); the
+// piece's box then left that corner out and the builder lost the line x = 592 there, so
+// fragment 126 was missing from the order for eyes in that corner of the level. Eyes on a grid
+// over the two walkable pieces of that area must get exactly the BSP order.
+TEST(PfdProperty, FreedoomMap01CornerOfNearlyParallelLines) {
+  Scene scene;
+  try {
+    scene = loadScene("freedoom2.wad:MAP01");
+  } catch (const SceneError& e) {
+    GTEST_SKIP() << e.what();  // freedoom2.wad not installed
+  }
+  const BspTree bsp = buildBsp(scene);
+  const std::vector<std::vector<glm::dvec2>> pieces = {
+      {{448, -1664}, {560, -1264}, {608, -1344}, {672, -1464}, {672, -1592}},
+      {{656, -1384}, {672, -1416}, {672, -1464}, {608, -1344}}};
+  PfdOptions options;
+  options.stat_eyes = 0;
+  const double height = 176.0 + 41.0;
+  const PfdTree tree = buildPfd(bsp, pieces, height, std::nullopt, options);
+  std::vector<uint32_t> order, ref;
+  uint64_t compared = 0;
+  for (double x = 560.25; x < 672.0; x += 1.5) {
+    for (double z = -1663.75; z < -1264.0; z += 1.5) {
+      const glm::dvec3 eye{x, height, z};
+      if (!strictlyInsidePfdRegion(tree, eye)) continue;
+      const PfdQueryResult q = pfdQuery(tree, eye, order);
+      if (q.on_line) continue;
+      backToFront(bsp, eye, ref, true);
+      ++compared;
+      ASSERT_EQ(order, ref) << "eye (" << x << ", " << z << ")";
+    }
+  }
+  EXPECT_GT(compared, 2000u);
+}
+
 }  // namespace
 }  // namespace walkvis

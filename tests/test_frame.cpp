@@ -2,6 +2,7 @@
 // same ids image on gen:office's height plane (painter's against a 24-bit z-buffer), `walkvis
 // render` writes N PNGs and a CSV, and a bad path file is named with exit status 2.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -135,7 +136,7 @@ TEST(FrameBuilder, WrongOrderIsCaught) {
 int run(const std::string& args) { return std::system((std::string(WALKVIS_BINARY) + " " + args).c_str()); }
 
 TEST(RenderCommand, WritesFramesAndCsv) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "walkvis_test_render";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("walkvis_test_render_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const int status = run("render gen:office --frames 5 --size 64x48 --mode pfd --out " + dir.string() +
                          " > /dev/null 2>&1");
@@ -157,10 +158,10 @@ TEST(RenderCommand, WritesFramesAndCsv) {
 }
 
 TEST(RenderCommand, BadPathFileIsNamed) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "walkvis_test_render_bad";
-  const std::filesystem::path bad = std::filesystem::temp_directory_path() / "walkvis_bad_path.csv";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("walkvis_test_render_bad_" + std::to_string(::getpid()));
+  const std::filesystem::path bad = std::filesystem::temp_directory_path() / ("walkvis_bad_path_" + std::to_string(::getpid()) + ".csv");
   { std::ofstream(bad) << "time,x,y,z,yaw,pitch\n0,1,2,oops,0,0\n"; }
-  const std::filesystem::path err = std::filesystem::temp_directory_path() / "walkvis_bad_path.err";
+  const std::filesystem::path err = std::filesystem::temp_directory_path() / ("walkvis_bad_path_" + std::to_string(::getpid()) + ".err");
   const int status = run("render gen:office --path " + bad.string() + " --out " + dir.string() + " 2> " + err.string());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2);

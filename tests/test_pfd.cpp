@@ -1,6 +1,7 @@
 // PFD tree: the order for every eye of the height plane equals the BSP back-to-front order with
 // back faces skipped (property tests over fixed seeds), the query's costs, and the tree file.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -365,7 +366,7 @@ TEST(Pfd, TreeFileRoundTripAndCorruption) {
   options.tree.stat_eyes = 100;
   uint64_t used = 0;
   file.levels.push_back(buildPfdLevel(file.bsp, scene.levels[0], 0, scene.eye_height, options, used));
-  const std::string path = (std::filesystem::temp_directory_path() / "walkvis_test_pfd.wvt").string();
+  const std::string path = (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_" + std::to_string(::getpid()) + ".wvt")).string();
   saveTreeFile(file, path);
   const TreeFile back = loadTreeFile(path);
   ASSERT_EQ(back.levels.size(), 1u);
@@ -439,7 +440,7 @@ TEST(Pfd, SequencesShareSubOrders) {
     file.eye_height = scene.eye_height;
     file.levels.push_back({});
     file.levels[0].cells.push_back(tree);
-    const std::string path = (std::filesystem::temp_directory_path() / "walkvis_test_pfd_seq.wvt").string();
+    const std::string path = (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_seq_" + std::to_string(::getpid()) + ".wvt")).string();
     saveTreeFile(file, path);
     const TreeFile back = loadTreeFile(path);
     const PfdTree& t = back.levels[0].cells[0];

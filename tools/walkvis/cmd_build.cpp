@@ -2,6 +2,7 @@
 // (cut into view cells where a tree would be too large), their statistics, and one tree file
 // holding them all. HFD trees (James & Day 1998, DESIGN.md "HFD tree") test each fragment for
 // visibility from the node's region with a VisibilityScene of the whole BSP (pfd_hfd/visibility.h).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -210,6 +211,15 @@ int runBuild(const BuildArgs& args) {
   j["total_bytes"] = used;
   uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0;
   auto trees = nlohmann::ordered_json::array();
+  // Query timing costs a BSP traversal per eye (tens of µs at 20k fragments), so the eyes are
+  // spread over the cells: at most 2,000 per cell and about 100,000 for the file (freedoom2 MAP12,
+  // several hundred cells, spent minutes here with 2,000 per cell), at least 64 per cell.
+  size_t cell_count = 0;
+  for (const PfdLevel& level : file.levels) cell_count += level.cells.size();
+  const size_t timing_max = std::min<uint32_t>(args.stat_eyes, 2000);
+  const uint32_t timing_eyes = static_cast<uint32_t>(
+      std::clamp<size_t>(100000 / std::max<size_t>(cell_count, 1), std::min<size_t>(64, timing_max), timing_max));
+  size_t cells_timed = 0;
   for (const PfdLevel& level : file.levels) {
     for (size_t c = 0; c < level.cells.size(); ++c) {
       const PfdTree& t = level.cells[c];
@@ -250,7 +260,8 @@ int runBuild(const BuildArgs& args) {
       vis_rays += s.visibility_rays;
       rejected += s.hidden_rejected;
       ++total_cells;
-      const QueryTiming qt = timeQueries(file.bsp, t, std::min<uint32_t>(args.stat_eyes, 2000));
+      const QueryTiming qt = timeQueries(file.bsp, t, std::min<uint32_t>(args.stat_eyes, timing_eyes));
+      if (++cells_timed % 50 == 0) progress("query timing: " + std::to_string(cells_timed) + " of " + std::to_string(cell_count) + " cells");
       e["query_ns"] = qt.pfd_ns;
       e["query_runs_ns"] = qt.runs_ns;
       e["runs_per_query"] = qt.runs_mean;

@@ -12,6 +12,8 @@
 
 #include <glad/gl.h>
 
+#include "walkthrough/gl_program.h"
+
 #include <algorithm>
 #include <cstring>
 
@@ -102,32 +104,9 @@ struct SceneDrawer::Impl {
     gl.DeleteVertexArrays(1, &object_vao);
   }
 
-  GLuint compile(GLenum type, const char* source, std::string& log) {
-    GLuint s = gl.CreateShader(type);
-    gl.ShaderSource(s, 1, &source, nullptr);
-    gl.CompileShader(s);
-    GLint ok = 0;
-    gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      char buf[1024] = {};
-      gl.GetShaderInfoLog(s, sizeof buf, nullptr, buf);
-      log += buf;
-    }
-    return s;
-  }
-
   void updatePositions(const glm::dvec3& eye) {
     if (positions_valid && eye == last_eye) return;
-    eye_relative.resize(vertices.size() * 3);
-    for (size_t v = 0; v < vertices.size(); ++v) {
-      const glm::dvec3 p = vertices[v] - eye;
-      eye_relative[3 * v] = static_cast<float>(p.x);
-      eye_relative[3 * v + 1] = static_cast<float>(p.y);
-      eye_relative[3 * v + 2] = static_cast<float>(p.z);
-    }
-    if (!eye_relative.empty())
-      gl.NamedBufferSubData(pos_buffer, 0, static_cast<GLsizeiptr>(eye_relative.size() * sizeof(float)),
-                            eye_relative.data());
+    gl_detail::uploadEyeRelative(gl, pos_buffer, vertices, eye, eye_relative);
     last_eye = eye;
     positions_valid = true;
   }
@@ -163,23 +142,9 @@ std::optional<SceneDrawer> SceneDrawer::create(GlLoader loader, std::string* why
   if (version == 0 || GLAD_VERSION_MAJOR(version) * 10 + GLAD_VERSION_MINOR(version) < 45)
     return fail("GL 4.5 core functions could not be loaded (is a GL 4.5 context current?)");
 
-  std::string log;
-  GLuint vs = impl->compile(GL_VERTEX_SHADER, kVertexShader, log);
-  GLuint fs = impl->compile(GL_FRAGMENT_SHADER, kFragmentShader, log);
-  if (!log.empty()) {
-    gl.DeleteShader(vs);
-    gl.DeleteShader(fs);
-    return fail("shader: " + log);
-  }
-  impl->program = gl.CreateProgram();
-  gl.AttachShader(impl->program, vs);
-  gl.AttachShader(impl->program, fs);
-  gl.LinkProgram(impl->program);
-  gl.DeleteShader(vs);
-  gl.DeleteShader(fs);
-  GLint linked = 0;
-  gl.GetProgramiv(impl->program, GL_LINK_STATUS, &linked);
-  if (!linked) return fail("shader program did not link");
+  std::string error;
+  impl->program = gl_detail::buildProgram(gl, kVertexShader, kFragmentShader, error);
+  if (impl->program == 0) return fail(error);
   impl->clip_location = gl.GetUniformLocation(impl->program, "clip");
   impl->style_location = gl.GetUniformLocation(impl->program, "style");
   impl->marker_location = gl.GetUniformLocation(impl->program, "marker");

@@ -2,6 +2,8 @@
 // does not at the default sampling, hidden from a region => hidden from its sub-regions (property
 // over seeds), and the answer is deterministic.
 #include <gtest/gtest.h>
+#include <optional>
+#include <array>
 
 #include <algorithm>
 #include <random>
@@ -76,6 +78,22 @@ uint32_t fragmentOf(const BspTree& bsp, uint32_t polygon) {
 }
 
 const Region kRoomA{{{0, 0}, {10, 0}, {10, 10}, {0, 10}}};
+
+
+// A random axis-aligned box region in the 30 × 30 room grid (x0 < x1, z0 < z1 in `bounds`), or
+// nothing when a side is under 0.5. Draws four numbers from `rng` either way.
+struct Box {
+  std::array<double, 4> bounds;  // x0, x1, z0, z1
+  Region region;
+};
+std::optional<Box> randomBox(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 30.0);
+  double x0 = u(rng), x1 = u(rng), z0 = u(rng), z1 = u(rng);
+  if (x0 > x1) std::swap(x0, x1);
+  if (z0 > z1) std::swap(z0, z1);
+  if (x1 - x0 < 0.5 || z1 - z0 < 0.5) return std::nullopt;
+  return Box{{x0, x1, z0, z1}, Region{{{x0, z0}, {x1, z0}, {x1, z1}, {x0, z1}}}};
+}
 
 TEST(Visibility, ClosedWallHides) {
   const TwoRooms r = twoRooms(0.0);
@@ -155,14 +173,12 @@ TEST(Visibility, HiddenFromRegionIsHiddenFromSubRegions) {
     opt.seed = seed;
     const VisibilityScene vis = VisibilityScene::build(bsp, opt);
     std::mt19937_64 rng(seed * 77);
-    std::uniform_real_distribution<double> u(0.0, 30.0);
     VisibilityCounters c;
     for (int trial = 0; trial < 40; ++trial) {
-      double x0 = u(rng), x1 = u(rng), z0 = u(rng), z1 = u(rng);
-      if (x0 > x1) std::swap(x0, x1);
-      if (z0 > z1) std::swap(z0, z1);
-      if (x1 - x0 < 0.5 || z1 - z0 < 0.5) continue;
-      const Region region{{{x0, z0}, {x1, z0}, {x1, z1}, {x0, z1}}};
+      const std::optional<Box> box = randomBox(rng);
+      if (!box) continue;
+      const auto [x0, x1, z0, z1] = box->bounds;
+      const Region& region = box->region;
       for (int k = 0; k < 10; ++k) {
         const uint32_t f = static_cast<uint32_t>(rng() % bsp.fragments.size());
         if (vis.visibleFromRegion(f, region, 1.5, c)) continue;
@@ -215,13 +231,11 @@ TEST(Visibility, ProofNeverHidesWhatSamplingSees) {
     const VisibilityScene a = VisibilityScene::build(bsp, on);
     const VisibilityScene b = VisibilityScene::build(bsp, off);
     std::mt19937_64 rng(seed * 31);
-    std::uniform_real_distribution<double> u(0.0, 30.0);
     for (int trial = 0; trial < 30; ++trial) {
-      double x0 = u(rng), x1 = u(rng), z0 = u(rng), z1 = u(rng);
-      if (x0 > x1) std::swap(x0, x1);
-      if (z0 > z1) std::swap(z0, z1);
-      if (x1 - x0 < 0.5 || z1 - z0 < 0.5) continue;
-      const Region region{{{x0, z0}, {x1, z0}, {x1, z1}, {x0, z1}}};
+      const std::optional<Box> box = randomBox(rng);
+      if (!box) continue;
+      const auto [x0, x1, z0, z1] = box->bounds;
+      const Region& region = box->region;
       for (int k = 0; k < 10; ++k) {
         const uint32_t f = static_cast<uint32_t>(rng() % bsp.fragments.size());
         VisibilityCounters ca, cb;

@@ -31,6 +31,14 @@
 // + horizontal_weight 0.5 1.606. Free first is off by default: it doubles the mean depth (MAP10
 // 14.1 -> 34.3, MAP26 11.3 -> 31.1) for N/n 1.611 -> 1.606. Split weights 5..1000, lookahead up
 // to 1,024 and seeds change N/n by < 0.03.
+//
+// Pilot method (choosePilot, Duin and Voss 1999): at nodes of >= pilot_min_set fragments and depth
+// <= pilot_depth_max the pilot_candidates best planes by the greedy score are each completed by a
+// greedy rollout (double approximation, count only) and the fewest total wins. MAP10: 1.611 ->
+// 1.602 (4 candidates, sets >= 512, depth <= 8), 1.574 (8, >= 64, <= 12 or <= 40), 1.583 (16,
+// >= 128, <= 40); CPU 0.65 s -> 3.0 s at (8, 64, 12). horizontal_fragment_weight (a crossed floor
+// or ceiling weighs w): w 0.5 1.662, 1.5 1.603, 2 1.613, 4 1.677; with the pilot, 1.5 gives 1.568.
+// Neither reaches the 1.5 target on MAP10.
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
 #include <CGAL/intersections.h>
@@ -38,6 +46,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
@@ -105,6 +114,25 @@ struct NodePlane {
   uint32_t poly;
 };
 
+// A splitter candidate (a fragment whose plane is the candidate) and its greedy score (lower wins).
+struct Ranked {
+  double score;
+  uint32_t rep;
+};
+
+// Keeps the k lowest scores in `top`, ascending; an equal score does not displace an earlier one,
+// so the first of equally good candidates stays first (as with a plain strict-less best).
+void offerRanked(std::vector<Ranked>& top, size_t k, double score, uint32_t rep) {
+  if (top.size() >= k && !(score < top.back().score)) return;
+  const auto it =
+      std::upper_bound(top.begin(), top.end(), score, [](double s, const Ranked& r) { return s < r.score; });
+  top.insert(it, Ranked{score, rep});
+  if (top.size() > k) top.pop_back();
+}
+
+// The score a candidate must beat to enter a top-k list.
+double rankThreshold(const std::vector<Ranked>& top, size_t k) { return top.size() >= k ? top.back().score : INFINITY; }
+
 class Builder {
  public:
   Builder(const Scene& scene, const BspOptions& options, BspTree& tree)
@@ -116,17 +144,36 @@ class Builder {
   int classify(const Vtx& v, const NodePlane& p);
   void partition(const std::vector<uint32_t>& in, const NodePlane& plane, std::vector<uint32_t>& on,
                  std::vector<uint32_t>& front, std::vector<uint32_t>& back);
+  // The best `k` splitters of the set by the greedy score, best first, into `top`.
+  void rankSplitters(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top);
   uint32_t chooseSplitter(const std::vector<uint32_t>& frags);
-  uint32_t chooseWithLookahead(const std::vector<uint32_t>& frags);
-  std::optional<uint32_t> chooseByFullCount(const std::vector<uint32_t>& frags);
+  uint32_t choosePilot(const std::vector<uint32_t>& frags);
+  void chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top);
+  bool chooseByFullCount(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top);
+  void chooseBySampling(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top);
+  void partitionApprox(const std::vector<uint32_t>& in, const Plane& pl, uint64_t& on,
+                       std::vector<uint32_t>& front, std::vector<uint32_t>& back);
+  uint64_t rolloutCount(std::vector<uint32_t> frags, uint64_t bound);
   int boxSide(const Plane& pl, uint32_t fi) const;
   // Factor on a candidate's crossing count: horizontal_weight for a horizontal plane (normal ±y).
   double crossWeight(const Plane& pl) const {
     return pl.n.x == 0.0 && pl.n.z == 0.0 ? options_.horizontal_weight : 1.0;
   }
   void pushFrag(const Frag& f);
+  void pushVtx(Vtx v) {
+    hv_.push_back(v.mid);
+    verts_.push_back(std::move(v));
+  }
   int heuristicSide(const Plane& pl, const Frag& f) const;
   void emit(uint32_t frag, const NodePlane& plane);
+  // Whether the budget pilot_work_max still covers a pilot at a node of m fragments, estimated
+  // as pilot_candidates rollouts of m fragments over ~log2(m) + 1 levels each (on freedoom2
+  // MAP10 the whole pilot measured 4.1 M for this estimate's unit).
+  bool pilotAffordable(size_t m) const {
+    const double estimate = static_cast<double>(options_.pilot_candidates) * static_cast<double>(m) *
+                            (std::log2(static_cast<double>(m)) + 1.0);
+    return static_cast<double>(pilot_work_) + estimate <= static_cast<double>(options_.pilot_work_max);
+  }
   uint64_t randomBelow(uint64_t n) { return rng_() % n; }  // bias < n / 2^64: irrelevant here
 
   const Scene& scene_;
@@ -134,13 +181,18 @@ class Builder {
   BspTree& tree_;
   std::mt19937_64 rng_;
   std::vector<Vtx> verts_;
+  // Heuristic positions, verts_[i].mid for i < verts_.size(); past that, the double vertices of
+  // the fragments a pilot rollout makes (dropped after each rollout).
+  std::vector<glm::dvec3> hv_;
   std::vector<Frag> frags_;
   std::vector<Box> boxes_;  // per fragment, parallel to frags_
   std::vector<int8_t> sides_;     // scratch
   std::vector<uint32_t> sample_;  // scratch
   std::vector<uint32_t> reps_;    // scratch of chooseWithLookahead: one fragment per distinct plane
   std::vector<uint64_t> masks_;   // scratch of chooseWithLookahead: per plane, split/front/back/on bitsets
+  std::vector<Ranked> ranked_;    // scratch of chooseSplitter
   uint64_t fallbacks_ = 0;
+  uint64_t pilot_work_ = 0;  // fragments of all rollout node sets so far (bounded by pilot_work_max)
   uint64_t refined_ = 0;  // stored vertices rounded from the exact point
   double heuristic_tol_ = 0.0;
 };
@@ -201,7 +253,7 @@ void Builder::partition(const std::vector<uint32_t>& in, const NodePlane& plane,
       for (uint32_t i = 0; i < f.count; ++i) {
         const uint32_t j = (i + 1) % f.count;
         const Vtx vi = verts_[f.first + i];
-        if (sides_[i] >= 0) verts_.push_back(vi);
+        if (sides_[i] >= 0) pushVtx(vi);
         if (sides_[i] <= 0) back_verts.push_back(vi);
         if (sides_[i] * sides_[j] < 0) {
           const K::Segment_3 seg(vi.p, verts_[f.first + j].p);
@@ -209,7 +261,7 @@ void Builder::partition(const std::vector<uint32_t>& in, const NodePlane& plane,
           const EPoint* ip = hit ? boost::get<EPoint>(&*hit) : nullptr;
           if (!ip) throw std::logic_error("bsp: exact split found no intersection point");
           const Vtx x = makeVtx(*ip);
-          verts_.push_back(x);
+          pushVtx(x);
           back_verts.push_back(x);
         }
       }
@@ -217,7 +269,7 @@ void Builder::partition(const std::vector<uint32_t>& in, const NodePlane& plane,
       pushFrag(Frag{f.poly, front_first, front_count});
       front.push_back(static_cast<uint32_t>(frags_.size() - 1));
       const uint32_t back_first = static_cast<uint32_t>(verts_.size());
-      for (auto& v : back_verts) verts_.push_back(std::move(v));
+      for (auto& v : back_verts) pushVtx(std::move(v));
       pushFrag(Frag{f.poly, back_first, static_cast<uint32_t>(back_verts.size())});
       back.push_back(static_cast<uint32_t>(frags_.size() - 1));
     }
@@ -229,7 +281,7 @@ void Builder::partition(const std::vector<uint32_t>& in, const NodePlane& plane,
 int Builder::heuristicSide(const Plane& pl, const Frag& f) const {
   bool pos = false, neg = false;
   for (uint32_t i = 0; i < f.count; ++i) {
-    const double v = glm::dot(pl.n, verts_[f.first + i].mid) - pl.d;
+    const double v = glm::dot(pl.n, hv_[f.first + i]) - pl.d;
     pos = pos || v > heuristic_tol_;
     neg = neg || v < -heuristic_tol_;
   }
@@ -248,7 +300,7 @@ int Builder::heuristicSide(const Plane& pl, const Frag& f) const {
 // split on each side. A crossed fragment's pieces are counted as the whole fragment (an estimate:
 // a piece may miss a plane its parent crossed). Cost: sides of all m fragments against all
 // P <= m distinct planes (m·P vertex tests), then P² bitset intersections of m bits.
-uint32_t Builder::chooseWithLookahead(const std::vector<uint32_t>& frags) {
+void Builder::chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top) {
   const size_t m = frags.size();
   const size_t words = (m + 63) / 64;
   reps_.clear();
@@ -282,38 +334,46 @@ uint32_t Builder::chooseWithLookahead(const std::vector<uint32_t>& frags) {
     return c;
   };
   // The fewest fragments of `set` crossed by the plane of any fragment of `set` (0 when empty).
+  // Horizontal fragments of the set (floors, ceilings): a crossing of one weighs
+  // horizontal_fragment_weight.
+  const double hf_extra = options_.horizontal_fragment_weight - 1.0;
+  std::vector<uint64_t> horizontal(words, 0);
+  for (size_t i = 0; i < m; ++i) {
+    const Plane& pl = scene_.polygons[frags_[frags[i]].poly].plane;
+    if (pl.n.x == 0.0 && pl.n.z == 0.0) horizontal[i / 64] |= uint64_t{1} << (i % 64);
+  }
+  auto crossings = [&](const uint64_t* crossed, const uint64_t* set) {
+    int64_t c = 0, h = 0;
+    for (size_t w = 0; w < words; ++w) {
+      const uint64_t x = set ? crossed[w] & set[w] : crossed[w];
+      c += std::popcount(x);
+      h += std::popcount(x & horizontal[w]);
+    }
+    return static_cast<double>(c) + hf_extra * static_cast<double>(h);
+  };
   auto bestNext = [&](const std::vector<uint64_t>& set) {
-    int64_t best = -1;
+    double best = -1;
     for (size_t p = 0; p < planes; ++p) {
       const uint64_t* on = mask(p, 3);
-      const uint64_t* crossed = mask(p, 0);
       bool present = false;
-      int64_t c = 0;
-      for (size_t w = 0; w < words; ++w) {
-        present = present || (on[w] & set[w]) != 0;
-        c += std::popcount(crossed[w] & set[w]);
-      }
-      if (present && (best < 0 || c < best)) {
+      for (size_t w = 0; w < words && !present; ++w) present = (on[w] & set[w]) != 0;
+      if (!present) continue;
+      const double c = crossings(mask(p, 0), set.data());
+      if (best < 0 || c < best) {
         best = c;
         if (best == 0) break;
       }
     }
-    return std::max<int64_t>(best, 0);
+    return std::max(best, 0.0);
   };
   std::vector<uint64_t> front_set(words), back_set(words);
-  double best_score = INFINITY;
-  uint32_t best = reps_[0];
   if (options_.free_first) {
     // A free plane (crossing nothing) first, the most balanced one; see chooseByFullCount.
     for (size_t c = 0; c < planes; ++c) {
       if (count(mask(c, 0)) != 0) continue;
-      const double score = static_cast<double>(std::abs(count(mask(c, 1)) - count(mask(c, 2))));
-      if (score < best_score) {
-        best_score = score;
-        best = reps_[c];
-      }
+      offerRanked(top, k, static_cast<double>(std::abs(count(mask(c, 1)) - count(mask(c, 2)))), reps_[c]);
     }
-    if (best_score < INFINITY) return best;
+    if (!top.empty()) return;
   }
   for (size_t c = 0; c < planes; ++c) {
     const uint64_t *crossed = mask(c, 0), *front = mask(c, 1), *back = mask(c, 2);
@@ -321,7 +381,7 @@ uint32_t Builder::chooseWithLookahead(const std::vector<uint32_t>& frags) {
       front_set[w] = front[w] | crossed[w];
       back_set[w] = back[w] | crossed[w];
     }
-    const int64_t splits = count(crossed);
+    const double splits = crossings(crossed, nullptr);
     const int64_t nf = count(front_set.data()), nb = count(back_set.data());
     const int64_t on = count(mask(c, 3));
     // A lower bound on the score without the lookahead: skip the lookahead when it cannot win.
@@ -329,22 +389,17 @@ uint32_t Builder::chooseWithLookahead(const std::vector<uint32_t>& frags) {
                             static_cast<double>(splits) +
                         static_cast<double>(std::abs(nf - nb)) -
                         options_.coplanar_weight * static_cast<double>(on);
-    if (base >= best_score) continue;
-    const int64_t next = (nf > 0 ? bestNext(front_set) : 0) + (nb > 0 ? bestNext(back_set) : 0);
-    const double score = base + options_.split_weight * static_cast<double>(next);
-    if (score < best_score) {
-      best_score = score;
-      best = reps_[c];
-    }
+    if (base >= rankThreshold(top, k)) continue;
+    const double next = (nf > 0 ? bestNext(front_set) : 0.0) + (nb > 0 ? bestNext(back_set) : 0.0);
+    offerRanked(top, k, base + options_.split_weight * static_cast<double>(next), reps_[c]);
   }
-  return best;
 }
 
 void Builder::pushFrag(const Frag& f) {
-  Box b{verts_[f.first].mid, verts_[f.first].mid};
+  Box b{hv_[f.first], hv_[f.first]};
   for (uint32_t i = 1; i < f.count; ++i) {
-    b.lo = glm::min(b.lo, verts_[f.first + i].mid);
-    b.hi = glm::max(b.hi, verts_[f.first + i].mid);
+    b.lo = glm::min(b.lo, hv_[f.first + i]);
+    b.hi = glm::max(b.hi, hv_[f.first + i]);
   }
   frags_.push_back(f);
   boxes_.push_back(b);
@@ -369,9 +424,9 @@ int Builder::boxSide(const Plane& pl, uint32_t fi) const {
 // Sampling candidates misses most free planes of a big set (a floor at the cell's lowest level,
 // a wall whose plane only touches the cell's boundary); taking them early removes their
 // fragments before other planes can cut them.
-std::optional<uint32_t> Builder::chooseByFullCount(const std::vector<uint32_t>& frags) {
+bool Builder::chooseByFullCount(const std::vector<uint32_t>& frags, size_t top_k, std::vector<Ranked>& top) {
   const size_t m = frags.size();
-  if (options_.full_count_max == 0) return std::nullopt;
+  if (options_.full_count_max == 0) return false;
   // Distinct planes: key on the coefficients made canonical (first nonzero normal component > 0).
   struct Key {
     double a, b, c, d;
@@ -397,22 +452,24 @@ std::optional<uint32_t> Builder::chooseByFullCount(const std::vector<uint32_t>& 
                        : Key{pl.n.x + 0.0, pl.n.y + 0.0, pl.n.z + 0.0, pl.d + 0.0};
     if (seen.emplace(k, fi).second) reps_.push_back(fi);
     if (static_cast<double>(reps_.size()) * static_cast<double>(m) > static_cast<double>(options_.full_count_max))
-      return std::nullopt;
+      return false;
   }
-  double best_score = INFINITY;
-  bool best_free = false;
-  uint32_t best = reps_[0];
+  // A free plane's score is lowered by kFreeBonus, far more than any score (at most
+  // split_weight · m + m), so free planes rank before all others and among themselves by balance.
+  const double free_bonus = 1e18;
   for (uint32_t rep : reps_) {
     const Plane& pl = scene_.polygons[frags_[rep].poly].plane;
     const double weight = options_.split_weight * crossWeight(pl);
-    int64_t crossed = 0, front = 0, back = 0;
+    double crossed = 0;
+    int64_t front = 0, back = 0;
     bool pruned = false;
     for (uint32_t fi : frags) {
       const int side = boxSide(pl, fi);
       if (side == 2) {
-        ++crossed;
-        // Past this, the plane cannot beat the best: a free one, or a lower lower bound.
-        if (best_free || weight * static_cast<double>(crossed) >= best_score) {
+        const Plane& own = scene_.polygons[frags_[fi].poly].plane;
+        crossed += own.n.x == 0.0 && own.n.z == 0.0 ? options_.horizontal_fragment_weight : 1.0;
+        // Past this, the plane cannot enter the top k (a free plane's score is below any bound).
+        if (weight * crossed >= rankThreshold(top, top_k)) {
           pruned = true;
           break;
         }
@@ -424,28 +481,35 @@ std::optional<uint32_t> Builder::chooseByFullCount(const std::vector<uint32_t>& 
     }
     if (pruned) continue;
     const bool is_free = options_.free_first && crossed == 0;
-    const double score = weight * static_cast<double>(crossed) + static_cast<double>(std::abs(front - back));
-    if ((is_free && !best_free) || (is_free == best_free && score < best_score)) {
-      best_score = score;
-      best_free = is_free;
-      best = rep;
-    }
+    const double score = weight * crossed + static_cast<double>(std::abs(front - back));
+    offerRanked(top, top_k, is_free ? score - free_bonus : score, rep);
   }
-  return best;
+  return true;
+}
+
+void Builder::rankSplitters(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top) {
+  top.clear();
+  if (frags.size() <= options_.lookahead_max) {
+    chooseWithLookahead(frags, k, top);
+  } else if (!chooseByFullCount(frags, k, top)) {
+    top.clear();
+    chooseBySampling(frags, k, top);
+  }
 }
 
 uint32_t Builder::chooseSplitter(const std::vector<uint32_t>& frags) {
   const size_t m = frags.size();
   if (m == 1) return frags[0];
   if (options_.heuristic == SplitHeuristic::kRandom) return frags[randomBelow(m)];
-  if (m <= options_.lookahead_max) return chooseWithLookahead(frags);
-  if (const auto full = chooseByFullCount(frags)) return *full;
+  rankSplitters(frags, 1, ranked_);
+  return ranked_.empty() ? frags[0] : ranked_[0].rep;
+}
 
+void Builder::chooseBySampling(const std::vector<uint32_t>& frags, size_t top_k, std::vector<Ranked>& top) {
+  const size_t m = frags.size();
   // Least crossed: each candidate plane is scored on a sample of the set (all of it when small),
   // enough to rank candidates, few enough that the choice costs O(candidates · samples) per node.
   const size_t k = std::max<size_t>(1, std::min<size_t>(options_.candidates, m));
-  double best_score = INFINITY;
-  uint32_t best = frags[0];
   const size_t max_samples = std::max<size_t>(1, options_.samples);
   const bool all_samples = m <= max_samples;
   const size_t samples = all_samples ? m : max_samples;
@@ -459,7 +523,7 @@ uint32_t Builder::chooseSplitter(const std::vector<uint32_t>& frags) {
       const Frag& f = frags_[fi];
       bool pos = false, neg = false;
       for (uint32_t i = 0; i < f.count; ++i) {
-        const double v = glm::dot(pl.n, verts_[f.first + i].mid) - pl.d;
+        const double v = glm::dot(pl.n, hv_[f.first + i]) - pl.d;
         pos = pos || v > heuristic_tol_;
         neg = neg || v < -heuristic_tol_;
       }
@@ -476,9 +540,111 @@ uint32_t Builder::chooseSplitter(const std::vector<uint32_t>& frags) {
     const double score = options_.split_weight * static_cast<double>(splits) -
                          options_.coplanar_weight * static_cast<double>(on) +
                          static_cast<double>(std::abs(front - back));
-    if (score < best_score) {
-      best_score = score;
-      best = cand;
+    offerRanked(top, top_k, score, cand);
+  }
+}
+
+// The double counterpart of partition, for pilot rollouts: sides with the heuristic tolerance,
+// straddlers split at double intersections into new fragments of hv_/frags_/boxes_ (dropped by
+// choosePilot after the rollout). Only the number of fragments on the plane is kept.
+void Builder::partitionApprox(const std::vector<uint32_t>& in, const Plane& node, uint64_t& on,
+                              std::vector<uint32_t>& front, std::vector<uint32_t>& back) {
+  std::vector<double> dist;
+  for (uint32_t fi : in) {
+    const Frag f = frags_[fi];
+    const Plane& own = scene_.polygons[f.poly].plane;
+    if ((own.n == node.n && own.d == node.d) || (own.n == -node.n && own.d == -node.d)) {
+      ++on;
+      continue;
+    }
+    const int side = boxSide(node, fi);
+    if (side == 0) {
+      ++on;
+    } else if (side == 1) {
+      front.push_back(fi);
+    } else if (side == -1) {
+      back.push_back(fi);
+    } else {
+      dist.resize(f.count);
+      for (uint32_t i = 0; i < f.count; ++i) {
+        const double v = glm::dot(node.n, hv_[f.first + i]) - node.d;
+        dist[i] = v > heuristic_tol_ ? v : v < -heuristic_tol_ ? v : 0.0;
+      }
+      for (int piece = 0; piece < 2; ++piece) {
+        const double sign = piece == 0 ? 1.0 : -1.0;
+        const uint32_t first = static_cast<uint32_t>(hv_.size());
+        for (uint32_t i = 0; i < f.count; ++i) {
+          const uint32_t j = (i + 1) % f.count;
+          if (sign * dist[i] >= 0.0) hv_.push_back(hv_[f.first + i]);
+          if (dist[i] * dist[j] < 0.0) {
+            const double t = dist[i] / (dist[i] - dist[j]);
+            hv_.push_back(hv_[f.first + i] + t * (hv_[f.first + j] - hv_[f.first + i]));
+          }
+        }
+        pushFrag(Frag{f.poly, first, static_cast<uint32_t>(hv_.size()) - first});
+        (piece == 0 ? front : back).push_back(static_cast<uint32_t>(frags_.size() - 1));
+      }
+    }
+  }
+}
+
+// Fragments of the subtree plain greedy would build over `frags` (counted on the double
+// approximation), or some count >= bound once it is clear that it reaches bound.
+uint64_t Builder::rolloutCount(std::vector<uint32_t> frags, uint64_t bound) {
+  uint64_t total = 0;
+  std::vector<std::vector<uint32_t>> stack;
+  stack.push_back(std::move(frags));
+  std::vector<uint32_t> front, back;
+  while (!stack.empty() && total < bound) {
+    std::vector<uint32_t> set = std::move(stack.back());
+    stack.pop_back();
+    if (set.size() == 1) {
+      ++total;
+      continue;
+    }
+    pilot_work_ += set.size();
+    const uint32_t splitter = chooseSplitter(set);
+    front.clear();
+    back.clear();
+    partitionApprox(set, scene_.polygons[frags_[splitter].poly].plane, total, front, back);
+    if (!front.empty()) stack.push_back(front);
+    if (!back.empty()) stack.push_back(back);
+  }
+  return total;
+}
+
+// Pilot method (Duin and Voss, "The Pilot Method: A Strategy for Heuristic Repetition with
+// Application to the Steiner Problem in Graphs", Networks 34, 1999): the best pilot_candidates
+// planes by the greedy score are each completed by a greedy rollout of both subtrees, and the
+// one whose whole subtree has the fewest fragments wins (the greedy's own first choice on ties).
+uint32_t Builder::choosePilot(const std::vector<uint32_t>& frags) {
+  std::vector<Ranked> top;
+  rankSplitters(frags, options_.pilot_candidates, top);
+  if (top.empty()) return frags[0];
+  const size_t saved_hv = hv_.size(), saved_frags = frags_.size();
+  uint64_t best_total = UINT64_MAX;
+  uint32_t best = top[0].rep;
+  std::vector<uint32_t> front, back;
+  for (size_t c = 0; c < top.size(); ++c) {
+    const Plane& pl = scene_.polygons[frags_[top[c].rep].poly].plane;
+    bool repeated = false;  // sampling may offer one plane twice
+    for (size_t e = 0; e < c; ++e) {
+      const Plane& q = scene_.polygons[frags_[top[e].rep].poly].plane;
+      repeated = repeated || (q.n == pl.n && q.d == pl.d) || (q.n == -pl.n && q.d == -pl.d);
+    }
+    if (repeated) continue;
+    uint64_t total = 0;
+    front.clear();
+    back.clear();
+    partitionApprox(frags, pl, total, front, back);
+    if (!front.empty() && total < best_total) total += rolloutCount(front, best_total - total);
+    if (!back.empty() && total < best_total) total += rolloutCount(back, best_total - total);
+    hv_.resize(saved_hv);
+    frags_.resize(saved_frags);
+    boxes_.resize(saved_frags);
+    if (total < best_total) {
+      best_total = total;
+      best = top[c].rep;
     }
   }
   return best;
@@ -538,6 +704,7 @@ uint64_t Builder::run() {
   heuristic_tol_ = 1e-9 * extent;
 
   verts_.reserve(scene_.vertices.size() * 2);
+  hv_.reserve(scene_.vertices.size() * 2);
   frags_.reserve(n * 2);
   boxes_.reserve(n * 2);
   std::vector<uint32_t> all(n);
@@ -548,10 +715,10 @@ uint64_t Builder::run() {
     const uint32_t first = static_cast<uint32_t>(verts_.size());
     for (const glm::dvec3& v : scene_.polygonVertices(poly)) {
       if (exact::planeSign(pl.n.x, pl.n.y, pl.n.z, pl.d, v.x, v.y, v.z) == 0) {
-        verts_.push_back(Vtx{EPoint(v.x, v.y, v.z), v, glm::dvec3(0.0), true});
+        pushVtx(Vtx{EPoint(v.x, v.y, v.z), v, glm::dvec3(0.0), true});
       } else {
         if (!kplane) kplane.emplace(pl.n.x, pl.n.y, pl.n.z, -pl.d);
-        verts_.push_back(makeVtx(kplane->projection(EPoint(v.x, v.y, v.z))));
+        pushVtx(makeVtx(kplane->projection(EPoint(v.x, v.y, v.z))));
       }
     }
     pushFrag(Frag{static_cast<uint32_t>(i), first, poly.vertex_count});
@@ -570,7 +737,13 @@ uint64_t Builder::run() {
   while (!stack.empty()) {
     Task task = std::move(stack.back());
     stack.pop_back();
-    const uint32_t splitter = chooseSplitter(task.frags);
+    // Not with free_first: its rule (a free plane first) would be overruled by the rollouts.
+    const bool pilot = options_.heuristic == SplitHeuristic::kLeastCrossed && options_.pilot_candidates > 1 &&
+                       !options_.free_first &&
+                       task.frags.size() >= std::max<uint32_t>(2, options_.pilot_min_set) &&
+                       tree_.nodes[task.node].depth <= options_.pilot_depth_max &&
+                       pilotAffordable(task.frags.size());
+    const uint32_t splitter = pilot ? choosePilot(task.frags) : chooseSplitter(task.frags);
     const uint32_t poly = frags_[splitter].poly;
     const Plane& pl = scene_.polygons[poly].plane;
     const NodePlane plane{pl.n.x, pl.n.y, pl.n.z, pl.d, poly};

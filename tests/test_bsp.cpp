@@ -530,6 +530,55 @@ TEST(Bsp, FullCountIsSeedIndependent) {
   }
 }
 
+// Pilot method: the greedy's own first choice is among the candidates and every rollout uses the
+// greedy, so on scenes where the choice is deterministic (full count and lookahead cover every
+// node) and the double rollout sees the same sides as the exact build (integer coordinates), the
+// pilot's tree never has more fragments than plain greedy. With no work budget it is plain greedy
+// exactly. Both are deterministic, exact and complete.
+TEST(Bsp, PilotNeverWorseThanGreedy) {
+  uint64_t pilot_total = 0, greedy_total = 0;
+  for (uint64_t seed : {3, 5, 8, 13}) {
+    Scene scene = wallScene(seed, 250);
+    // Floor and ceiling tiles: big horizontal polygons the vertical walls' planes cut.
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        const double x = 25.0 * i, z = 25.0 * j;
+        addFace(scene, std::vector<glm::dvec3>{{x, 0, z}, {x, 0, z + 25}, {x + 25, 0, z + 25}, {x + 25, 0, z}},
+                kColor, "test");
+        addFace(scene, std::vector<glm::dvec3>{{x, 3, z}, {x + 25, 3, z}, {x + 25, 3, z + 25}, {x, 3, z + 25}},
+                kColor, "test");
+      }
+    BspOptions greedy;
+    greedy.pilot_candidates = 0;
+    BspOptions pilot;
+    pilot.pilot_candidates = 6;
+    pilot.pilot_min_set = 16;
+    pilot.pilot_depth_max = 64;
+    BspOptions no_budget = pilot;
+    no_budget.pilot_work_max = 0;
+    const BspTree g = buildBsp(scene, greedy), p = buildBsp(scene, pilot), p2 = buildBsp(scene, pilot),
+                  nb = buildBsp(scene, no_budget);
+    std::printf("walls %llu + floors: greedy N/n %.3f, pilot N/n %.3f\n", static_cast<unsigned long long>(seed),
+                g.stats.ratio, p.stats.ratio);
+    EXPECT_LE(p.fragments.size(), g.fragments.size()) << "seed " << seed;
+    pilot_total += p.fragments.size();
+    greedy_total += g.fragments.size();
+    auto sameTree = [](const BspTree& a, const BspTree& b) {
+      if (a.nodes.size() != b.nodes.size() || a.fragments.size() != b.fragments.size()) return false;
+      for (size_t i = 0; i < a.nodes.size(); ++i)
+        if (a.nodes[i].polygon != b.nodes[i].polygon || a.nodes[i].front != b.nodes[i].front) return false;
+      return true;
+    };
+    EXPECT_TRUE(sameTree(p, p2)) << "seed " << seed << ": pilot not deterministic";
+    EXPECT_TRUE(sameTree(nb, g)) << "seed " << seed << ": pilot_work_max 0 is not plain greedy";
+    std::vector<uint32_t> order;
+    backToFront(p, glm::dvec3(50.5, 1.5, 50.5), order);
+    expectPermutation(order, p.fragments.size());
+  }
+  std::printf("pilot %llu fragments, greedy %llu\n", static_cast<unsigned long long>(pilot_total),
+              static_cast<unsigned long long>(greedy_total));
+}
+
 TEST(Bsp, EmptySceneAndBadPlanes) {
   Scene empty;
   const BspTree tree = buildBsp(empty);

@@ -173,6 +173,48 @@ TEST(Pfd, RandomBuildingsMatchBspOrder) {
   }
 }
 
+// The test-line heuristic changes only the order of the tests: without HFD the leaves are the
+// cells of the crossing lines whatever the order, so nodes and the entropy bound are the same for
+// every heuristic, and the orders still equal the BSP's. More candidates for kBalanced give more
+// even splits and so fewer tests on average (summed over seeds: a greedy choice is not better on
+// every single tree), and the default stays within 1.3 × the entropy bound (issue 4's target).
+TEST(Pfd, BalancedCandidatesFewerTestsSameLeaves) {
+  double traversal_tests = 0.0, few_tests = 0.0, default_tests = 0.0, entropy = 0.0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const Scene scene = loadScene("gen:office?rooms=10&seed=" + std::to_string(seed));
+    const BspTree bsp = buildBsp(scene);
+    const FloorLevel& level = scene.levels[0];
+    const double height = level.floor_y + scene.eye_height;
+    PfdOptions traversal;
+    traversal.heuristic = PfdHeuristic::kTraversal;
+    PfdOptions few;
+    few.candidates = 16;
+    const PfdOptions defaults;
+    ASSERT_GT(defaults.candidates, few.candidates);
+    const PfdTree t = buildPfd(bsp, level.walkable, height, std::nullopt, traversal);
+    const PfdTree f = buildPfd(bsp, level.walkable, height, std::nullopt, few);
+    const PfdTree d = buildPfd(bsp, level.walkable, height, std::nullopt, defaults);
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    ASSERT_GT(d.stats.leaves, 1000u);  // big enough for the choice to matter
+    EXPECT_EQ(t.stats.leaves, d.stats.leaves);
+    EXPECT_EQ(f.stats.leaves, d.stats.leaves);
+    EXPECT_NEAR(t.stats.tests_entropy_bound, d.stats.tests_entropy_bound, 1e-9 * d.stats.tests_entropy_bound);
+    EXPECT_EQ(d.stats.nodes, 2 * d.stats.leaves - 1);
+    const CheckResult r = checkTree(bsp, d, 500, seed);
+    EXPECT_EQ(r.mismatches, 0u);
+    EXPECT_GT(r.eyes, 450u);
+    traversal_tests += t.stats.tests_mean;
+    few_tests += f.stats.tests_mean;
+    default_tests += d.stats.tests_mean;
+    entropy += d.stats.tests_entropy_bound;
+  }
+  std::printf("mean tests summed over 3 seeds: traversal %.3f, 16 candidates %.3f, default %.3f; entropy %.3f\n",
+              traversal_tests, few_tests, default_tests, entropy);
+  EXPECT_LT(few_tests, traversal_tests);
+  EXPECT_LT(default_tests, few_tests);
+  EXPECT_LE(default_tests, 1.3 * entropy);
+}
+
 TEST(Pfd, ViewCellsCoverTheLevel) {
   const Scene scene = randomBuilding(11, 12, 1.5);
   const BspTree bsp = buildBsp(scene);

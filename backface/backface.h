@@ -53,6 +53,10 @@ struct BackfaceView {
 };
 
 enum class BackfaceMethod { kPolygon, kMask, kCluster, kCone, kHierarchy };
+
+// The widest vector instructions a per-frame pass may use (cluster's flat pass). The paths compute
+// the same results; a level the CPU lacks falls back to the widest it has (checked at build).
+enum class BackfaceSimd : uint8_t { kScalar, kSse2, kAvx2, kAuto };
 // "polygon", "mask", "cluster", "cone", "hierarchy"; parseBackfaceMethod throws SceneError for anything else.
 std::string_view backfaceMethodName(BackfaceMethod method);
 BackfaceMethod parseBackfaceMethod(std::string_view name);
@@ -72,8 +76,9 @@ struct BackfaceOptions {
   // exact plane test instead of a table. One table costs 0.85-1.1 us to build (N = 16), about the
   // plane test on 1,000 listed polygons, and PFD runs average under 2 fragments; 1 = tables only.
   uint32_t mask_list_min_chunk = 512;
-  // cluster: T/R, the time of one cluster test over the time to render one vertex (paper §3).
-  double cluster_tr = 1.0;
+  // cluster: T/R, the time of one cluster test over the time to render one vertex (paper §3);
+  // 0 = chosen from the polygon count (clusterTrFor below).
+  double cluster_tr = 0.0;
   // cluster: side R of the near-field box, as a multiple of the model's bounding-box diagonal.
   double cluster_near_field = 10.0;
   // cluster: the box the eyes are in, for the culling probability that drives clustering (world
@@ -90,6 +95,9 @@ struct BackfaceOptions {
   // false (default): every leaf test, eight clusters per SIMD block, no branch (clustered.cpp);
   // measured 7-14x cheaper per frame than the tree's traversal on gen:sphere, gen:dome, the bunny.
   bool cluster_hierarchy = false;
+  // cluster: the flat pass's vector path (kAuto: AVX2 where the CPU has it, else SSE2); the others
+  // exist so that tests can check that the paths agree.
+  BackfaceSimd simd = BackfaceSimd::kAuto;
   // cone: meshlet limits (the issue asks for 64 / 124) and meshoptimizer's cone_weight.
   uint32_t cone_max_vertices = 64;
   uint32_t cone_max_triangles = 124;
@@ -134,6 +142,15 @@ std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const 
 // kept). polygon_culled.size() must be culler.polygonCount(). No allocation.
 void expandToPolygons(const BackfaceCuller& culler, std::span<const uint8_t> unit_culled,
                       std::span<uint8_t> polygon_culled);
+
+// cluster's T/R: `requested` when > 0; for 0, from the polygon count: min(1, max(0.25, √(4000/n))),
+// the paper's peak T/R = 1 up to 4,000 polygons. Why: at a fixed T/R the clusters get larger as a
+// mesh gets finer (gen:sphere at T/R = 1: 96 clusters of 2,000 triangles, 448 of 69,620), so the
+// per-frame pass shrinks to a vanishing share while effectiveness falls behind the meshlet cones'
+// (70k sphere: 88.7% vs 89.9%); T/R ∝ 1/√n keeps the cluster count growing with the mesh (70k:
+// T/R 0.25, 1,933 clusters, 95.3% at 0.011 ns per polygon against the cones' 0.040, measured
+// `walkvis bench backface --tr 0.25`). Negative or non-finite: SceneError.
+double clusterTrFor(size_t polygons, double requested);
 
 // Per-method builders (one file each).
 std::unique_ptr<BackfaceCuller> makePolygonCuller(const BackfaceInput& input);

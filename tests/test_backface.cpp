@@ -2,6 +2,7 @@
 // front half-space, isFrontFacing), over 10,000 random perspective eyes per mesh; every method
 // culls something from far away; the near-field probability integral of Johannsen & Carter.
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -332,4 +333,85 @@ TEST(Backface, MaskResolutionFollowsThePolygonCount) {
     last = n;
   }
 }
+}  // namespace walkvis
+
+namespace walkvis {
+namespace {
+
+// The flat cluster pass has scalar, SSE2 and AVX2 paths (a path the CPU lacks falls back to the
+// widest it has): they must give the same flags, eye by eye, including eyes within 1e-12 of a
+// plane where the float margin decides.
+TEST(Backface, ClusterSimdPathsAgree) {
+  for (const Scene& s : {loadScene("gen:sphere?tris=3000"), backface_test::randomSoup(31, 500),
+                         backface_test::farFromOriginSphere()}) {
+    SCOPED_TRACE(s.name);
+    std::vector<std::unique_ptr<BackfaceCuller>> cullers;
+    for (BackfaceSimd simd : {BackfaceSimd::kScalar, BackfaceSimd::kSse2, BackfaceSimd::kAvx2}) {
+      BackfaceOptions options;
+      options.simd = simd;
+      cullers.push_back(makeBackfaceCuller(BackfaceMethod::kCluster, backfaceInput(s), options));
+    }
+    const size_t units = cullers[0]->unitCount();
+    ASSERT_GT(units, 8u);
+    for (const auto& c : cullers) ASSERT_EQ(c->unitCount(), units);
+    const Frame f = frameOf(s);
+    std::mt19937_64 rng(32);
+    std::vector<std::vector<uint8_t>> flags(cullers.size(), std::vector<uint8_t>(units));
+    uint64_t culled = 0;
+    for (int e = 0; e < 2000; ++e) {
+      BackfaceView view;
+      view.eye = randomEye(s, rng, f);
+      for (size_t k = 0; k < cullers.size(); ++k) cullers[k]->cull(view, flags[k]);
+      ASSERT_EQ(flags[1], flags[0]) << "eye " << e;
+      ASSERT_EQ(flags[2], flags[0]) << "eye " << e;
+      for (uint8_t x : flags[0]) culled += x;
+    }
+    EXPECT_GT(culled, 0u);
+  }
+}
+
+// Coplanar fragments of one wall merge at no loss of culling probability; parallel walls at other
+// offsets do not. With the polygons interleaved (fragment 0 of every wall, then fragment 1, ...)
+// the candidates of equal normal must still be taken nearest plane first, or the first other wall
+// ends a cluster's growth (80 clusters of one quad each instead of one per wall).
+TEST(Backface, CoplanarFragmentsShareACluster) {
+  Scene s;
+  s.name = "parallel walls";
+  constexpr int kWalls = 10, kFragments = 8;
+  for (int f = 0; f < kFragments; ++f) {
+    for (int w = 0; w < kWalls; ++w) {
+      const double x = w, z0 = f, z1 = f + 1.0;
+      const glm::dvec3 quad[] = {{x, 0.0, z0}, {x, 1.0, z0}, {x, 1.0, z1}, {x, 0.0, z1}};
+      addFace(s, quad, 0, "wall");
+    }
+  }
+  BackfaceOptions options;
+  const Bounds b = sceneBounds(s);
+  options.cluster_eye_lo = b.lo - glm::dvec3(1.0);
+  options.cluster_eye_hi = b.hi + glm::dvec3(1.0);
+  const auto culler = makeBackfaceCuller(BackfaceMethod::kCluster, backfaceInput(s), options);
+  EXPECT_EQ(culler->unitCount(), static_cast<size_t>(kWalls));
+  for (size_t u = 0; u < culler->unitCount(); ++u) {
+    const auto polys = culler->unitPolygons(u);
+    for (uint32_t p : polys) EXPECT_EQ(s.polygons[p].plane.d, s.polygons[polys[0]].plane.d) << "unit " << u;
+  }
+}
+
+TEST(Backface, ClusterTrFollowsThePolygonCount) {
+  EXPECT_EQ(clusterTrFor(2000, 0.0), 1.0);
+  EXPECT_EQ(clusterTrFor(4000, 0.0), 1.0);
+  EXPECT_NEAR(clusterTrFor(16000, 0.0), 0.5, 1e-12);
+  EXPECT_EQ(clusterTrFor(1000000, 0.0), 0.25);
+  EXPECT_EQ(clusterTrFor(70000, 2.5), 2.5);
+  EXPECT_THROW(clusterTrFor(100, -1.0), SceneError);
+  EXPECT_THROW(clusterTrFor(100, NAN), SceneError);
+  double last = 2.0;
+  for (size_t n = 1; n < 10000000; n = n * 3 / 2 + 1) {
+    const double tr = clusterTrFor(n, 0.0);
+    EXPECT_LE(tr, last);
+    last = tr;
+  }
+}
+
+}  // namespace
 }  // namespace walkvis

@@ -1,5 +1,7 @@
-// walkvis bench backface [--mesh SCENE ...] [--lists WAD:MAP] [--eyes K] [--runs K] [--json]: every backface method
-// of backface/ and meshoptimizer's meshlet cone culling on the same meshes and the same eyes.
+// walkvis bench backface [--mesh SCENE ...] [--lists WAD:MAP] [--eyes K] [--runs K] [--only ROW,...] [--json]: every
+// backface method of backface/ and meshoptimizer's meshlet cone culling on the same meshes and the same eyes
+// (--only: just the named rows; the lists table always runs none, for its over_none column). --tr 0 (default):
+// cluster's T/R from the polygon count (clusterTrFor).
 //
 // Eyes: uniformly random directions at 1.5–4 bounding radii from the centre of the mesh's box,
 // looking at the centre with a 60° cone (Johannsen & Carter measure from a sphere around the
@@ -22,7 +24,8 @@
 // (backface/list_cull.h) per method none/polygon/mask/mask-groups/cluster/hierarchy/region, and
 // meshoptimizer cones built per run; random eyes on the height plane; per eye the runs of its query
 // are culled in order (timed: cullRange with the order written out; cone: cull, expansion and
-// order). Figures are per listed polygon. mask is Zhang & Hoff's table on chunks of at least
+// order). Figures are per listed polygon; over_none is ns/poly minus none's (the same walk writing the runs out
+// unculled), the cost the culling adds. mask is Zhang & Hoff's table on chunks of at least
 // mask_list_min_chunk positions and the plane test on smaller ones (nearly every PFD run);
 // mask-tables builds a table for every run. Then the BSP path: every fragment of the level's BSP
 // with eyes anywhere in the scene's box, the same table as for meshes, its cluster rows clustered
@@ -62,7 +65,7 @@ struct BackfaceBenchArgs {
   int eyes = 200;
   int runs = 5;
   uint64_t seed = 1;
-  double tr = 1.0;
+  double tr = 0.0;  // 0: clusterTrFor's choice from the polygon count
   int mask_resolution = 0;
   uint32_t mask_group = 256;
   bool json = false;
@@ -71,7 +74,12 @@ struct BackfaceBenchArgs {
   std::string bunny;     // empty: the cache path of scripts/fetch-bunny
   bool no_bunny = false;
   std::string lists = "freedoom2.wad:MAP01";  // empty: no priority lists
+  std::vector<std::string> only;  // row labels to run; empty: all
 };
+
+bool rowSelected(const BackfaceBenchArgs& args, const std::string& label) {
+  return args.only.empty() || std::find(args.only.begin(), args.only.end(), label) != args.only.end();
+}
 
 struct Variant {
   std::string label;
@@ -231,6 +239,7 @@ nlohmann::ordered_json benchInput(const std::string& label, const BackfaceInput&
   std::vector<uint8_t> invisible(n);
   coneInvisiblePolygons(input, invisible);
   for (const Variant& variant : variants(args, eye_box)) {
+    if (!rowSelected(args, variant.label)) continue;
     const auto t0 = std::chrono::steady_clock::now();
     const auto culler = makeBackfaceCuller(variant.method, input, variant.options);
     const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -420,8 +429,11 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
                 lists["mesh"].get<std::string>().c_str(), trees.cells.size(),
                 static_cast<unsigned long long>(lists["runs"].get<uint64_t>()), lists["listed_per_eye"].get<double>(),
                 100.0 * lists["back_facing_ratio"].get<double>(), eyes.size(), tree_seconds);
-    std::printf("  %-13s %8s %8s %9s %8s %8s %7s %9s\n", "method", "culled%", "effect%", "ns/poly", "B/poly", "", "false",
-                "build_s");
+    // over_none: ns/poly minus none's (which writes the same runs out unculled), i.e. what the
+    // culling adds to a frame's list walk; the runs average a few polygons, so the walk itself
+    // (a call and an append per run) is a floor no method can go below.
+    std::printf("  %-13s %8s %8s %9s %8s %9s %7s %9s\n", "method", "culled%", "effect%", "ns/poly", "B/poly", "over_none",
+                "false", "build_s");
   }
   BackfaceOptions base;
   base.mask_resolution = args.mask_resolution;
@@ -444,7 +456,9 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
   nlohmann::ordered_json methods = nlohmann::ordered_json::array();
   std::vector<uint32_t> order;
   order.reserve(pool);
+  double none_ns = NAN;  // none's ns per polygon (first row), for over_none
   for (const ListRow& row : rows) {
+    if (!rowSelected(args, row.label) && row.label != "none") continue;
     const auto t1 = std::chrono::steady_clock::now();
     std::vector<ListCuller> cullers;
     // cone: one meshoptimizer culler per run, over the run's own vertices.
@@ -543,6 +557,7 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
       if (sink == uint64_t(-1)) std::printf(" ");
     }
     if (!row.cone && false_culls > 0) ok = false;
+    if (row.method == ListCullMethod::kNone && !row.cone) none_ns = medianOf(ns);
     const double culled_ratio = static_cast<double>(culled_total) / static_cast<double>(listed);
     const double effectiveness = back_total ? static_cast<double>(culled_total) / static_cast<double>(back_total) : 0.0;
     const double bytes_per_polygon = static_cast<double>(bytes) / static_cast<double>(std::max<uint64_t>(pool, 1));
@@ -550,14 +565,15 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
                        {"culled_ratio", culled_ratio},
                        {"effectiveness", effectiveness},
                        {"ns_per_polygon", medianOf(ns)},
+                       {"ns_per_polygon_over_none", medianOf(ns) - none_ns},
                        {"bytes_per_polygon", bytes_per_polygon},
                        {"false_culls", false_culls},
                        {"false_culls_zero_area", false_invisible},
                        {"build_seconds", build_seconds}});
     if (!args.json) {
-      std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %8s %7llu %9.3f\n", row.label.c_str(), 100.0 * culled_ratio,
-                  100.0 * effectiveness, medianOf(ns), bytes_per_polygon, "", static_cast<unsigned long long>(false_culls),
-                  build_seconds);
+      std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %9.3f %7llu %9.3f\n", row.label.c_str(), 100.0 * culled_ratio,
+                  100.0 * effectiveness, medianOf(ns), bytes_per_polygon, medianOf(ns) - none_ns,
+                  static_cast<unsigned long long>(false_culls), build_seconds);
       if (row.cone && false_invisible > 0) printZeroAreaNote(false_invisible);
     }
   }
@@ -629,7 +645,7 @@ void addBenchBackface(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--eyes", args->eyes, "Random eyes per mesh")->check(CLI::Range(1, 100000));
   sub->add_option("--runs", args->runs, "Timed passes over the eyes; the median is reported")->check(CLI::Range(1, 1000));
   sub->add_option("--seed", args->seed, "Seed of the eyes");
-  sub->add_option("--tr", args->tr, "Johannsen-Carter T/R (cluster test time over vertex time)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--tr", args->tr, "Johannsen-Carter T/R (cluster test time over vertex time); 0: from the polygon count (clusterTrFor)")->check(CLI::NonNegativeNumber);
   sub->add_option("--mask-n", args->mask_resolution, "Normal-mask cells per cube-face side (0: from the polygon count)")->check(CLI::Range(0, 18));
   sub->add_option("--mask-group", args->mask_group, "Polygons per view-cone group of mask-groups")->check(CLI::Range(1u, 1u << 30));
   sub->add_option("--bunny", args->bunny, "The bunny OBJ (default: where scripts/fetch-bunny puts it; skipped when missing)");
@@ -637,6 +653,8 @@ void addBenchBackface(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--lists", args->lists,
                   "WAD level whose start level is built as PFD trees (drop_back_faces = false) and culled per run, "
                   "then its BSP fragments; empty string: none (default freedoom2.wad:MAP01)");
+  sub->add_option("--only", args->only, "Run only these rows (method labels, e.g. cluster cone), repeatable")
+      ->delimiter(',');
   sub->add_flag("--json", args->json, "Print JSON");
   sub->add_flag("--subdivision", args->subdivision,
                 "Also Moller-Sequin culled Loop subdivision of the animated blob at 1..3 levels");

@@ -201,6 +201,52 @@ TEST(Visibility, HiddenFromRegionIsHiddenFromSubRegions) {
   EXPECT_GT(checked, 80);
 }
 
+// Sixteen closed rooms in a row ([5k, 5k + 5] x [0, 5], no doors) and, in room 4, a cabinet in
+// front of the side wall z = 5 that leaves only the wall's top 0.4 in view. Seen from the whole
+// row (one region over all sixteen rooms), the wall is visible from a sixteenth of the region,
+// over the cabinet (the office's misses, DESIGN.md "What is already known": room grids). The
+// refinement finds it here without the samples in front too (printed); the office figures in
+// docs/hfd/README.md are where those samples show.
+TEST(Visibility, WallOfOneRoomKeptFromTheWholeRow) {
+  Scene s;
+  const double top = 3.0, cab = 2.6;
+  addQuad(s, {0, 0, 0}, {80, 0, 0}, {80, 0, 5}, {0, 0, 5}, {0, 1, 0});
+  addQuad(s, {0, top, 0}, {80, top, 0}, {80, top, 5}, {0, top, 5}, {0, -1, 0});
+  addQuad(s, {0, 0, 0}, {80, 0, 0}, {80, top, 0}, {0, top, 0}, {0, 0, 1});
+  addQuad(s, {0, 0, 5}, {20, 0, 5}, {20, top, 5}, {0, top, 5}, {0, 0, -1});
+  const uint32_t wall = addQuad(s, {20, 0, 5}, {25, 0, 5}, {25, top, 5}, {20, top, 5}, {0, 0, -1});
+  addQuad(s, {25, 0, 5}, {80, 0, 5}, {80, top, 5}, {25, top, 5}, {0, 0, -1});
+  addQuad(s, {0, 0, 0}, {0, 0, 5}, {0, top, 5}, {0, top, 0}, {1, 0, 0});
+  addQuad(s, {80, 0, 0}, {80, 0, 5}, {80, top, 5}, {80, top, 0}, {-1, 0, 0});
+  for (int k = 1; k < 16; ++k) wallX(s, 5.0 * k, 0, 5, 0, top);
+  // The cabinet: [20.2, 24.8] x [4.2, 5], 2.6 high; its front, top and ends.
+  addQuad(s, {20.2, 0, 4.2}, {24.8, 0, 4.2}, {24.8, cab, 4.2}, {20.2, cab, 4.2}, {0, 0, -1});
+  addQuad(s, {20.2, cab, 4.2}, {24.8, cab, 4.2}, {24.8, cab, 5}, {20.2, cab, 5}, {0, 1, 0});
+  addQuad(s, {20.2, 0, 4.2}, {20.2, 0, 5}, {20.2, cab, 5}, {20.2, cab, 4.2}, {-1, 0, 0});
+  addQuad(s, {24.8, 0, 4.2}, {24.8, 0, 5}, {24.8, cab, 5}, {24.8, cab, 4.2}, {1, 0, 0});
+  const BspTree bsp = buildBsp(s);
+  Region row;
+  for (int k = 0; k < 16; ++k) row.push_back({{5.0 * k, 0}, {5.0 * k + 5, 0}, {5.0 * k + 5, 5}, {5.0 * k, 5}});
+  int kept = 0, kept_without = 0, fragments = 0;
+  for (uint64_t seed = 1; seed <= 50; ++seed) {
+    VisibilityOptions on, off;
+    on.seed = off.seed = seed;
+    off.near_samples = false;
+    const VisibilityScene vis_on = VisibilityScene::build(bsp, on), vis_off = VisibilityScene::build(bsp, off);
+    VisibilityCounters c;
+    for (uint32_t f = 0; f < bsp.fragments.size(); ++f) {
+      if (bsp.fragment_polygon[f] != wall) continue;
+      ++fragments;
+      const bool v = vis_on.visibleFromRegion(f, row, 1.5, c);
+      EXPECT_TRUE(v) << "seed " << seed << " fragment " << f;
+      kept += v;
+      kept_without += vis_off.visibleFromRegion(f, row, 1.5, c);
+    }
+  }
+  EXPECT_GT(fragments, 0);
+  std::printf("wall kept %d / %d with samples in front, %d without\n", kept, fragments, kept_without);
+}
+
 TEST(Visibility, ProofRejectsAClosedWallWithFewRays) {
   const TwoRooms r = twoRooms(0.0);
   const BspTree bsp = buildBsp(r.scene);

@@ -227,6 +227,14 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
                        const PfdLevelOptions& options, uint64_t& used_bytes,
                        const std::function<void(const std::string&)>& progress = {});
 
+// Every level's trees (levels[k] gets level index k), levels built in parallel with their cells:
+// a Freedoom map has up to a hundred levels of one cell each, whose own work comes in batches
+// too small to keep two threads busy. The result does not depend on thread order. `used_bytes`
+// and `progress` as for buildPfdLevel (progress lines of different levels may interleave).
+std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
+                                     const PfdLevelOptions& options, uint64_t& used_bytes,
+                                     const std::function<void(const std::string&)>& progress = {});
+
 // The tree of the level's cell that holds (eye.x, eye.z), or null when none does (cells are
 // half-open boxes [lo, hi)).
 const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye);

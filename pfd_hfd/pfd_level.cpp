@@ -4,7 +4,8 @@
 // the square of the test-lines that cross its region (nodes ≈ 0.25–0.34·L²), so a cell is cut in
 // four while that estimate exceeds the per-cell budget. A cell whose build still passes the budget
 // is abandoned at once (the builder checks after every node) and cut again. The cells of a level
-// are built in parallel (TBB); the result does not depend on thread order.
+// (and, through buildPfdLevels, the levels) are built in parallel (TBB); the result does not
+// depend on thread order.
 #include <atomic>
 #include <cmath>
 #include <exception>
@@ -32,9 +33,12 @@ struct PlannedCell {
 
 }  // namespace
 
-PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
-                       const PfdLevelOptions& options, uint64_t& used_bytes,
-                       const std::function<void(const std::string&)>& progress) {
+namespace {
+
+// buildPfdLevel with the budget shared by levels built at once.
+PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
+                    const PfdLevelOptions& options, std::atomic<uint64_t>& used,
+                    const std::function<void(const std::string&)>& progress) {
   PfdLevel out;
   out.level = level_index;
   out.floor_y = level.floor_y;
@@ -93,7 +97,6 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
   if (planned.size() > 1) say(where + ": " + std::to_string(planned.size()) + " view cells planned");
 
   // Build, in rounds: a cell over its budget is replaced by its quarters and built again.
-  std::atomic<uint64_t> used{used_bytes};
   auto totalError = [&] {
     return PfdBudgetError("pfd: " + where + ": the trees exceed the memory budget of " +
                           std::to_string(options.max_memory) + " bytes; raise --max-memory");
@@ -148,6 +151,34 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
     }
     planned = std::move(again);
   }
+  return out;
+}
+
+}  // namespace
+
+PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
+                       const PfdLevelOptions& options, uint64_t& used_bytes,
+                       const std::function<void(const std::string&)>& progress) {
+  std::atomic<uint64_t> used{used_bytes};
+  PfdLevel out = buildLevel(bsp, level, level_index, eye_height, options, used, progress);
+  used_bytes = used.load();
+  return out;
+}
+
+std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
+                                     const PfdLevelOptions& options, uint64_t& used_bytes,
+                                     const std::function<void(const std::string&)>& progress) {
+  std::atomic<uint64_t> used{used_bytes};
+  std::mutex progress_mutex;
+  const std::function<void(const std::string&)> say = [&](const std::string& line) {
+    if (!progress) return;
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    progress(line);
+  };
+  std::vector<PfdLevel> out(levels.size());
+  tbb::parallel_for(size_t{0}, levels.size(), [&](size_t l) {
+    out[l] = buildLevel(bsp, levels[l], static_cast<uint32_t>(l), eye_height, options, used, say);
+  });
   used_bytes = used.load();
   return out;
 }

@@ -309,6 +309,38 @@ TEST(Pfd, HardCasesMatchBspOrder) {
   }
 }
 
+// Levels built in parallel equal levels built one by one: same cells, same nodes, same lists.
+TEST(Pfd, ParallelLevelsEqualOneByOne) {
+  Scene scene;
+  try {
+    scene = loadScene("freedoom2.wad:MAP30");
+  } catch (const SceneError& e) {
+    GTEST_SKIP() << e.what();
+  }
+  ASSERT_GT(scene.levels.size(), 2u);
+  const BspTree bsp = buildBsp(scene);
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 0;
+  uint64_t used_one = 0, used_all = 0;
+  std::vector<PfdLevel> one;
+  for (size_t l = 0; l < scene.levels.size(); ++l)
+    one.push_back(buildPfdLevel(bsp, scene.levels[l], static_cast<uint32_t>(l), scene.eye_height, options, used_one));
+  const std::vector<PfdLevel> all = buildPfdLevels(bsp, scene.levels, scene.eye_height, options, used_all);
+  EXPECT_EQ(used_one, used_all);
+  ASSERT_EQ(one.size(), all.size());
+  for (size_t l = 0; l < one.size(); ++l) {
+    EXPECT_EQ(one[l].level, all[l].level);
+    EXPECT_EQ(one[l].height, all[l].height);
+    ASSERT_EQ(one[l].cells.size(), all[l].cells.size()) << "level " << l;
+    for (size_t c = 0; c < one[l].cells.size(); ++c) {
+      const PfdTree &a = one[l].cells[c], &b = all[l].cells[c];
+      EXPECT_EQ(a.nodes.size(), b.nodes.size());
+      EXPECT_EQ(a.run_refs, b.run_refs);
+      EXPECT_EQ(a.fragment_ids, b.fragment_ids);
+    }
+  }
+}
+
 TEST(Pfd, FreedoomMapMatchesBspOrder) { checkScene("freedoom2.wad:MAP01", 1000); }
 
 // drop_back_faces = false: the lists equal backToFront(bsp, eye, order, false).

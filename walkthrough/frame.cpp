@@ -118,9 +118,8 @@ World openWorld(const std::string& source, const WorldOptions& options,
       // Run-time methods need the back faces in the lists; otherwise the exact region method.
       level_options.tree.drop_back_faces = !isRunTimeMethod(options.cull);
       uint64_t used = 0;
-      for (size_t l = 0; l < world.scene.levels.size(); ++l)
-        world.trees.levels.push_back(buildPfdLevel(world.trees.bsp, world.scene.levels[l], static_cast<uint32_t>(l),
-                                                   world.scene.eye_height, level_options, used, progress));
+      world.trees.levels =
+          buildPfdLevels(world.trees.bsp, world.scene.levels, world.scene.eye_height, level_options, used, progress);
     }
   }
   const BspTree& bsp = world.trees.bsp;

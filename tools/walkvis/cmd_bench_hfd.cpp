@@ -292,8 +292,8 @@ int runHfdBench(const HfdBenchArgs& args) {
         lo.tree.visibility = &vis;
         lo.tree.stat_eyes = 0;
         uint64_t used = 0;
-        for (uint32_t l = 0; l < levels; ++l)
-          file.levels.push_back(buildPfdLevel(bsp, scene.levels[l], l, scene.eye_height, lo, used));
+        file.levels = buildPfdLevels(bsp, std::span<const FloorLevel>(scene.levels.data(), levels), scene.eye_height,
+                                     lo, used);
         pt.build_seconds = secondsSince(t0);
         for (const PfdLevel& level : file.levels)
           for (const PfdTree& t : level.cells) {

@@ -168,11 +168,8 @@ int runBuild(const BuildArgs& args) {
   }
   uint64_t used = 0;
   const auto build0 = std::chrono::steady_clock::now();
-  for (size_t l = 0; l < scene.levels.size(); ++l) {
-    progress("level " + std::to_string(l) + " of " + std::to_string(scene.levels.size()) + "...");
-    file.levels.push_back(
-        buildPfdLevel(file.bsp, scene.levels[l], static_cast<uint32_t>(l), scene.eye_height, options, used, progress));
-  }
+  progress(std::to_string(scene.levels.size()) + " levels, built in parallel...");
+  file.levels = buildPfdLevels(file.bsp, scene.levels, scene.eye_height, options, used, progress);
   const double trees_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build0).count();
   saveTreeFile(file, args.output);
   progress("wrote " + args.output);

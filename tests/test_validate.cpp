@@ -63,6 +63,35 @@ TEST(Validate, BspOrderHasNoOrderErrorsOnRandomScenes) {
   }
 }
 
+// With a clearance, no eye stands nearer a wall than it: a 4 x 4 room whose walls span the eye
+// height keeps every eye in [c, 4 - c]^2, and without one some eyes fall outside that square.
+TEST(Validate, EyesKeepTheirClearanceFromWalls) {
+  Scene scene;
+  scene.eye_height = 1.5;
+  auto quad = [&](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c3, glm::dvec3 d) {
+    const std::vector<glm::dvec3> v{a, b, c3, d};
+    addFace(scene, v, 0x808080, "test");
+  };
+  quad({0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0});
+  quad({0, 0, 0}, {0, 3, 0}, {0, 3, 4}, {0, 0, 4});
+  quad({4, 0, 0}, {4, 0, 4}, {4, 3, 4}, {4, 3, 0});
+  quad({0, 0, 0}, {4, 0, 0}, {4, 3, 0}, {0, 3, 0});
+  quad({0, 0, 4}, {0, 3, 4}, {4, 3, 4}, {4, 0, 4});
+  scene.levels.push_back({0.0, {{{0, 0}, {4, 0}, {4, 4}, {0, 4}}}, 16.0});
+  const double c = 0.4;
+  auto outside = [&](const std::vector<ValidationEye>& eyes) {
+    int n = 0;
+    for (const auto& e : eyes)
+      n += e.position.x < c || e.position.x > 4 - c || e.position.z < c || e.position.z > 4 - c;
+    return n;
+  };
+  const auto clear = sampleEyes(scene, 300, 7, 0.0, c);
+  const auto plain = sampleEyes(scene, 300, 7, 0.0);
+  ASSERT_EQ(clear.size(), 300u);
+  EXPECT_EQ(outside(clear), 0);
+  EXPECT_GT(outside(plain), 50);  // about 36% of the room lies within c of a wall
+}
+
 TEST(Validate, EyesAreSampledInTheWalkableRegion) {
   const Scene scene = randomScene(1, 3);
   const auto eyes = sampleEyes(scene, 40, 5, 0.25);

@@ -159,7 +159,33 @@ PixelCounts& PixelCounts::operator+=(const PixelCounts& o) {
   return *this;
 }
 
-std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t seed, double off_plane_fraction) {
+namespace {
+
+// True when `p` lies within `clearance` of polygon `poly` (its plane within the clearance and p's
+// foot inside it, or an edge within the clearance). Doubles are enough: it only chooses eyes.
+bool nearPolygon(const Scene& scene, const Polygon& poly, const glm::dvec3& p, double clearance) {
+  const double side = glm::dot(poly.plane.n, p) - poly.plane.d;
+  if (!(std::abs(side) <= clearance)) return false;
+  const glm::dvec3 foot = p - side * poly.plane.n;
+  bool all_left = true, all_right = true;
+  for (uint32_t k = 0; k < poly.vertex_count; ++k) {
+    const glm::dvec3 a = scene.vertices[poly.first_vertex + k];
+    const glm::dvec3 b = scene.vertices[poly.first_vertex + (k + 1) % poly.vertex_count];
+    const glm::dvec3 ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    const double t = len2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+    if (glm::length(p - (a + t * ab)) <= clearance) return true;
+    const double turn = glm::dot(glm::cross(ab, foot - a), poly.plane.n);
+    all_left &= turn >= 0.0;
+    all_right &= turn <= 0.0;
+  }
+  return all_left || all_right;  // inside a convex polygon (the BSP's fragments are convex)
+}
+
+}  // namespace
+
+std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t seed, double off_plane_fraction,
+                                      double min_clearance) {
   std::vector<ValidationEye> eyes;
   if (count <= 0) return eyes;
   std::mt19937_64 rng(seed);
@@ -180,6 +206,24 @@ std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t se
       }
     }
   }
+  constexpr int kClearanceAttempts = 64;
+  std::vector<std::pair<glm::dvec3, glm::dvec3>> boxes;  // polygon bounds, for min_clearance
+  if (min_clearance > 0.0)
+    for (const Polygon& poly : scene.polygons) {
+      glm::dvec3 lo(HUGE_VAL), hi(-HUGE_VAL);
+      for (uint32_t k = 0; k < poly.vertex_count; ++k) {
+        lo = glm::min(lo, scene.vertices[poly.first_vertex + k]);
+        hi = glm::max(hi, scene.vertices[poly.first_vertex + k]);
+      }
+      boxes.push_back({lo, hi});
+    }
+  auto tooClose = [&](const glm::dvec3& p) {
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      const glm::dvec3 q = glm::clamp(p, boxes[i].first, boxes[i].second);
+      if (glm::length(q - p) <= min_clearance && nearPolygon(scene, scene.polygons[i], p, min_clearance)) return true;
+    }
+    return false;
+  };
   const int off_count = static_cast<int>(std::floor(count * std::clamp(off_plane_fraction, 0.0, 1.0)));
   std::discrete_distribution<size_t> pick_piece(weights.begin(), weights.end());
   for (int k = 0; k < count; ++k) {
@@ -188,10 +232,13 @@ std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t se
       eye.position = b.lo + glm::dvec3(unit(rng), unit(rng), unit(rng)) * (b.hi - b.lo);
       eye.on_height_plane = false;
     } else {
-      const Piece& piece = pieces[pick_piece(rng)];
-      const glm::dvec2 xz = samplePiece(*piece.ring, rng);
-      eye.level = piece.level;
-      eye.position = {xz.x, scene.levels[piece.level].floor_y + scene.eye_height, xz.y};
+      for (int attempt = 0; attempt < kClearanceAttempts; ++attempt) {
+        const Piece& piece = pieces[pick_piece(rng)];
+        const glm::dvec2 xz = samplePiece(*piece.ring, rng);
+        eye.level = piece.level;
+        eye.position = {xz.x, scene.levels[piece.level].floor_y + scene.eye_height, xz.y};
+        if (!tooClose(eye.position)) break;
+      }
     }
     if (k >= count - off_count) {
       eye.position.y = b.lo.y + unit(rng) * (b.hi.y - b.lo.y);
@@ -294,7 +341,8 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
   const RayCaster caster(vertices, polygons);
   result.raycast_seconds += since(t0);
 
-  const std::vector<ValidationEye> eyes = sampleEyes(scene, options.eyes, options.seed, options.off_plane_fraction);
+  const std::vector<ValidationEye> eyes =
+      sampleEyes(scene, options.eyes, options.seed, options.off_plane_fraction, options.eyes_clear_of_near ? near : 0.0);
   std::vector<ViewReport> reports;
   std::vector<uint32_t> order_ids, painter_ids;
   std::vector<uint8_t> listed;

@@ -72,8 +72,10 @@ struct ValidationEye {
 // `count` eyes, uniform over the walkable area of all levels (each convex piece weighted by its area)
 // at floor_y + eye_height. A fraction `off_plane_fraction` of them (rounded down) keeps its (x, z)
 // but takes a uniform random y within the scene's vertical bounds. Without levels, eyes are uniform
-// in the scene's bounding box. Deterministic for a seed.
-std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t seed, double off_plane_fraction);
+// in the scene's bounding box. Deterministic for a seed. With min_clearance > 0, an eye on a height
+// plane within that distance of a polygon is drawn again (at most 64 times; the last draw is kept).
+std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t seed, double off_plane_fraction,
+                                      double min_clearance = 0.0);
 
 // order(eye, out): the polygons to draw for that eye in painter's order (back to front), indices into
 // the polygon span given to runValidation; back faces may be left in or out (GL culls them).
@@ -86,6 +88,11 @@ struct ValidationOptions {
   std::vector<int> zbits{16, 24, 32};  // z-buffer precisions to test; may be empty
   double off_plane_fraction = 0.0;   // see sampleEyes
   double near = -1.0;                // near plane (camera depth); < 0: 0.05 * eye height
+  // Eyes at least the near distance from every polygon. For orders that leave polygons out (HFD):
+  // an eye nearer a wall than the near plane sees through it in GL and in the reference alike, and
+  // what lies behind (rightly not listed) would count as missed. Off for the BSP and PFD orders,
+  // which list everything and so draw the see-through view correctly.
+  bool eyes_clear_of_near = false;
   int worst_views = 5;               // how many worst views to keep
   std::string diff_dir;              // when set: PNGs of views with order or z-buffer errors
   int max_diff_images = 200;         // at most this many PNGs are written

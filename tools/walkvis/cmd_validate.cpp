@@ -277,6 +277,7 @@ int runValidate(const ValidateArgs& args) {
   options.diff_dir = args.diff_dir;
   // Off the height planes only the BSP order is defined (PFD/HFD orders hold on the planes).
   options.off_plane_fraction = args.order == "bsp" ? args.off_plane : 0.0;
+  options.eyes_clear_of_near = args.order == "hfd";
   const auto progress_start = Clock::now();
   if (!args.quiet) {
     options.progress = [&](int done, int total, uint64_t errors) {

@@ -18,9 +18,10 @@
 // §3 Algorithm 1, adapted to polygon lists (a polygon plays a tristrip, its vertex count its
 // rendering cost C/R): seed = the remaining polygon with the highest culling probability; add the
 // remaining polygons in order of decreasing n·n_seed while the merge pays off by the cost model;
-// recur on the rest (ours: near-parallel candidates nearest plane first, so coplanar pieces of one wall
-// merge before a parallel wall ends the growth: Freedoom MAP01's 2,470 BSP fragments form 153
-// clusters, not 1,040). T/R: options.cluster_tr, by default clusterTrFor(polygon count). The merge condition: the paper's derivation
+// recur on the rest (ours: near-parallel candidates nearest plane first, so coplanar pieces of
+// one wall merge before a parallel wall ends the growth: Freedoom MAP01's 2,470 BSP fragments form
+// 153 clusters, not 1,040). T/R: options.cluster_tr, by default clusterTrFor(polygon count). The
+// merge condition: the paper's derivation
 //   T + (1 − P_C)·C_C < 2T + (1 − P_A)·C_A + (1 − P_B)·C_B
 // gives P_C > (P_A·C_A + P_B·C_B − T) / (C_A + C_B); the printed (9)/(10) carry +T, a sign slip
 // (with +T a merge could never pass, since merging never raises the culling probability above the
@@ -50,6 +51,7 @@
 #endif
 
 #include "backface/backface.h"
+#include "backface/spread_bits.h"
 
 namespace walkvis {
 namespace {
@@ -149,16 +151,6 @@ constexpr double kFloatMargin = 16.0 * 0x1p-24;
 // |e − origin| beyond this: single precision would overflow or cannot resolve the model; the flat
 // pass then culls nothing (a model 1e30 away from the eye is not drawn anyway).
 constexpr double kMaxFloatEye = 1e30;
-
-// kSpread[b]: the eight bits of b as eight bytes 0/1 (byte j = bit j).
-constexpr std::array<uint64_t, 256> makeSpread() {
-  std::array<uint64_t, 256> t{};
-  for (uint64_t b = 0; b < 256; ++b) {
-    for (int j = 0; j < 8; ++j) t[b] |= ((b >> j) & 1u) << (8 * j);
-  }
-  return t;
-}
-constexpr std::array<uint64_t, 256> kSpread = makeSpread();
 
 // Bit l set when lane l of the block culls: Σ_c max(N^c·e'^c, M^c·e'^c) − d <= limit. The scalar,
 // SSE and AVX2 versions do the same single-precision operations in the same order (no FMA), so
@@ -402,16 +394,20 @@ class ClusterCuller final : public BackfaceCuller {
     }
 #endif
     const size_t full = units / kLanes;
-    for (size_t k = 0; k < blocks_.size(); ++k) {
+    // The path is chosen once per frame, not per block.
+    auto pass = [&](auto blockBits) {
+      for (size_t k = 0; k < blocks_.size(); ++k) {
+        const uint64_t bytes = kSpread[blockBits(blocks[k], fx, fy, fz, limit)];
+        std::memcpy(out + k * kLanes, &bytes, k < full ? kLanes : units - k * kLanes);
+      }
+    };
 #if defined(__SSE2__)
-      const unsigned bits = simd_ == BackfaceSimd::kSse2 ? blockBitsSse(blocks[k], fx, fy, fz, limit)
-                                                         : blockBitsScalar(blocks[k], fx, fy, fz, limit);
-#else
-      const unsigned bits = blockBitsScalar(blocks[k], fx, fy, fz, limit);
-#endif
-      const uint64_t bytes = kSpread[bits];
-      std::memcpy(out + k * kLanes, &bytes, k < full ? kLanes : units - k * kLanes);
+    if (simd_ == BackfaceSimd::kSse2) {
+      pass(blockBitsSse);
+      return;
     }
+#endif
+    pass(blockBitsScalar);
   }
 
   void buildBlocks() {
@@ -472,14 +468,14 @@ class ClusterCuller final : public BackfaceCuller {
     std::vector<uint8_t> alive(count, 1);
     std::vector<uint32_t> members, candidates, pool;
     std::vector<double> key(count);
-    double offset_scale = 0.0;  // the largest plane offset difference: ties keys stay below kOffsetTieWeight
+    double offset_scale = 0.0;  // the largest plane offset difference: tie keys stay below kOffsetTieWeight
     {
       double lo = INFINITY, hi = -INFINITY;
       for (const PolyData& p : polys_) {
         lo = std::min(lo, p.dd);
         hi = std::max(hi, p.dd);
       }
-      offset_scale = count && hi > lo ? hi - lo : 1.0;
+      offset_scale = hi > lo ? hi - lo : 1.0;
     }
     size_t next_seed = 0;
     unit_begin_.push_back(0);

@@ -38,6 +38,7 @@
 #include <string>
 
 #include "backface/backface.h"
+#include "backface/spread_bits.h"
 
 namespace walkvis {
 
@@ -46,17 +47,6 @@ namespace {
 // directions, axis and limit (relative error 2⁻²⁴ each) and the three-term sum stay below
 // 5e-7 in all; 2e-6 leaves a factor four and only spares clusters within ~2e-6 rad of the rim.
 constexpr double kCapMargin = 2e-6;
-
-// kSpread[b]: the eight bits of b as eight bytes 0/1 (byte j = bit j), for writing a row of
-// table entries from a row of bits.
-constexpr std::array<uint64_t, 256> makeSpread() {
-  std::array<uint64_t, 256> t{};
-  for (uint64_t b = 0; b < 256; ++b) {
-    for (int j = 0; j < 8; ++j) t[b] |= ((b >> j) & 1u) << (8 * j);
-  }
-  return t;
-}
-constexpr std::array<uint64_t, 256> kSpread = makeSpread();
 }  // namespace
 
 int maskResolutionFor(size_t polygons, int requested) {

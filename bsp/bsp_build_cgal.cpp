@@ -46,7 +46,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
@@ -114,6 +113,14 @@ struct NodePlane {
   uint32_t poly;
 };
 
+// A floor or ceiling plane (normal ±y exactly, as the loaders write them).
+bool isHorizontal(const Plane& pl) { return pl.n.x == 0.0 && pl.n.z == 0.0; }
+
+// The same plane in either orientation (coefficients equal or exactly negated).
+bool samePlane(const Plane& a, const Plane& b) {
+  return (a.n == b.n && a.d == b.d) || (a.n == -b.n && a.d == -b.d);
+}
+
 // A splitter candidate (a fragment whose plane is the candidate) and its greedy score (lower wins).
 struct Ranked {
   double score;
@@ -157,7 +164,12 @@ class Builder {
   int boxSide(const Plane& pl, uint32_t fi) const;
   // Factor on a candidate's crossing count: horizontal_weight for a horizontal plane (normal ±y).
   double crossWeight(const Plane& pl) const {
-    return pl.n.x == 0.0 && pl.n.z == 0.0 ? options_.horizontal_weight : 1.0;
+    return isHorizontal(pl) ? options_.horizontal_weight : 1.0;
+  }
+  // What crossing fragment `fi` counts in a candidate's crossings: horizontal_fragment_weight for
+  // a floor or ceiling, else 1.
+  double crossedWeight(uint32_t fi) const {
+    return isHorizontal(scene_.polygons[frags_[fi].poly].plane) ? options_.horizontal_fragment_weight : 1.0;
   }
   void pushFrag(const Frag& f);
   void pushVtx(Vtx v) {
@@ -191,6 +203,7 @@ class Builder {
   std::vector<uint32_t> reps_;    // scratch of chooseWithLookahead: one fragment per distinct plane
   std::vector<uint64_t> masks_;   // scratch of chooseWithLookahead: per plane, split/front/back/on bitsets
   std::vector<Ranked> ranked_;    // scratch of chooseSplitter
+  std::vector<double> dist_;      // scratch of partitionApprox
   uint64_t fallbacks_ = 0;
   uint64_t pilot_work_ = 0;  // fragments of all rollout node sets so far (bounded by pilot_work_max)
   uint64_t refined_ = 0;  // stored vertices rounded from the exact point
@@ -338,10 +351,8 @@ void Builder::chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, 
   // horizontal_fragment_weight.
   const double hf_extra = options_.horizontal_fragment_weight - 1.0;
   std::vector<uint64_t> horizontal(words, 0);
-  for (size_t i = 0; i < m; ++i) {
-    const Plane& pl = scene_.polygons[frags_[frags[i]].poly].plane;
-    if (pl.n.x == 0.0 && pl.n.z == 0.0) horizontal[i / 64] |= uint64_t{1} << (i % 64);
-  }
+  for (size_t i = 0; i < m; ++i)
+    if (isHorizontal(scene_.polygons[frags_[frags[i]].poly].plane)) horizontal[i / 64] |= uint64_t{1} << (i % 64);
   auto crossings = [&](const uint64_t* crossed, const uint64_t* set) {
     int64_t c = 0, h = 0;
     for (size_t w = 0; w < words; ++w) {
@@ -454,7 +465,7 @@ bool Builder::chooseByFullCount(const std::vector<uint32_t>& frags, size_t top_k
     if (static_cast<double>(reps_.size()) * static_cast<double>(m) > static_cast<double>(options_.full_count_max))
       return false;
   }
-  // A free plane's score is lowered by kFreeBonus, far more than any score (at most
+  // A free plane's score is lowered by free_bonus, far more than any score (at most
   // split_weight · m + m), so free planes rank before all others and among themselves by balance.
   const double free_bonus = 1e18;
   for (uint32_t rep : reps_) {
@@ -466,8 +477,7 @@ bool Builder::chooseByFullCount(const std::vector<uint32_t>& frags, size_t top_k
     for (uint32_t fi : frags) {
       const int side = boxSide(pl, fi);
       if (side == 2) {
-        const Plane& own = scene_.polygons[frags_[fi].poly].plane;
-        crossed += own.n.x == 0.0 && own.n.z == 0.0 ? options_.horizontal_fragment_weight : 1.0;
+        crossed += crossedWeight(fi);
         // Past this, the plane cannot enter the top k (a free plane's score is below any bound).
         if (weight * crossed >= rankThreshold(top, top_k)) {
           pruned = true;
@@ -549,11 +559,10 @@ void Builder::chooseBySampling(const std::vector<uint32_t>& frags, size_t top_k,
 // choosePilot after the rollout). Only the number of fragments on the plane is kept.
 void Builder::partitionApprox(const std::vector<uint32_t>& in, const Plane& node, uint64_t& on,
                               std::vector<uint32_t>& front, std::vector<uint32_t>& back) {
-  std::vector<double> dist;
+  std::vector<double>& dist = dist_;
   for (uint32_t fi : in) {
     const Frag f = frags_[fi];
-    const Plane& own = scene_.polygons[f.poly].plane;
-    if ((own.n == node.n && own.d == node.d) || (own.n == -node.n && own.d == -node.d)) {
+    if (samePlane(scene_.polygons[f.poly].plane, node)) {
       ++on;
       continue;
     }
@@ -628,10 +637,7 @@ uint32_t Builder::choosePilot(const std::vector<uint32_t>& frags) {
   for (size_t c = 0; c < top.size(); ++c) {
     const Plane& pl = scene_.polygons[frags_[top[c].rep].poly].plane;
     bool repeated = false;  // sampling may offer one plane twice
-    for (size_t e = 0; e < c; ++e) {
-      const Plane& q = scene_.polygons[frags_[top[e].rep].poly].plane;
-      repeated = repeated || (q.n == pl.n && q.d == pl.d) || (q.n == -pl.n && q.d == -pl.d);
-    }
+    for (size_t e = 0; e < c && !repeated; ++e) repeated = samePlane(scene_.polygons[frags_[top[e].rep].poly].plane, pl);
     if (repeated) continue;
     uint64_t total = 0;
     front.clear();

@@ -31,6 +31,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace walkvis {
@@ -143,6 +144,38 @@ glm::dvec2 pullTowards(const glm::dvec2& p, const glm::dvec2& c, double shrink, 
   if (!(len > 0.0)) return c;
   const double f = std::min(0.5, std::max(shrink, gap / len));
   return p + f * (c - p);
+}
+
+// The squared diameter of a point set (largest squared distance between two of its points).
+double diameter2(std::span<const glm::dvec2> v) {
+  double d = 0.0;
+  for (size_t a = 0; a < v.size(); ++a)
+    for (size_t b = a + 1; b < v.size(); ++b) d = std::max(d, glm::dot(v[b] - v[a], v[b] - v[a]));
+  return d;
+}
+
+// The point of the convex pieces nearest to `want`, pulled `inset` towards its piece's centroid;
+// with a half-plane g·q + c0 >= 0 (`g` non-null), only the part of each piece inside it (`clip`
+// is scratch). nullopt when no piece has such a part.
+std::optional<glm::dvec2> nearestInPieces(std::span<const Convex2> pieces, const glm::dvec2& want, double inset,
+                                          const glm::dvec2* g, double c0, std::vector<glm::dvec2>& clip) {
+  double best = std::numeric_limits<double>::infinity();
+  std::optional<glm::dvec2> out;
+  for (const Convex2& piece : pieces) {
+    // A piece whose bounding circle lies farther than the best point so far cannot hold a nearer
+    // one (regions of a Freedoom level have hundreds of pieces). The factor keeps the rounding of
+    // the bound (~1e-16 relative) from skipping a piece that ties.
+    const double lower = glm::length(want - piece.centroid) - piece.radius;
+    if (lower > 0.0 && lower * lower > best * (1.0 + 1e-9)) continue;
+    if (g && !clipHalfPlane(piece.v, *g, c0, clip)) continue;
+    double d2;
+    const glm::dvec2 c = closestInConvex(g ? clip : piece.v, want, d2);
+    if (d2 < best) {
+      best = d2;
+      out = pullTowards(c, piece.centroid, 0.0, inset);
+    }
+  }
+  return out;
 }
 
 // Random point of a convex polygon by area (fan triangles), from two uniform numbers.
@@ -716,12 +749,6 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       if (covered) continue;
       if (it.depth >= kMaxProofDepth || budget == 0) return 0;
       // Halve whichever of R and T is larger, in scene units.
-      auto diameter2 = [&](std::span<const glm::dvec2> v) {
-        double d = 0.0;
-        for (size_t a = 0; a < v.size(); ++a)
-          for (size_t b = a + 1; b < v.size(); ++b) d = std::max(d, glm::dot(v[b] - v[a], v[b] - v[a]));
-        return d;
-      };
       const bool split_region = diameter2(rp) >= diameter2(tq);
       uint32_t halves[4];
       if (!halve(split_region ? it.region_first : it.target_first, split_region ? it.region_count : it.target_count,
@@ -787,27 +814,13 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     // large region is seen from that room only, which area samples hit rarely (DESIGN.md "What is
     // already known": room grids); these eyes stand in it, facing the wall from a useful distance.
     if (n_near > 0) {
-      double diameter = 0.0;
-      for (size_t a = 0; a < sc.target2.size(); ++a)
-        for (size_t b = a + 1; b < sc.target2.size(); ++b)
-          diameter = std::max(diameter, glm::length(sc.target2[b] - sc.target2[a]));
+      const double diameter = std::sqrt(diameter2(sc.target2));
       for (uint32_t k = 0; k < n_near; ++k) {
         const glm::dvec2 q = k == 0 ? tc : pointInConvex(target_c, uniform01(rng), uniform01(rng), sc.tri_cum);
         const glm::dvec3 in_front = target3(q) + tp.n * (diameter * (k + uniform01(rng)) / n_near);
-        const glm::dvec2 want{in_front.x, in_front.z};
-        double best = std::numeric_limits<double>::infinity();
-        glm::dvec2 eye2{0.0};
-        for (const auto& piece : sc.pieces) {
-          const double lower = glm::length(want - piece.centroid) - piece.radius;
-          if (lower > 0.0 && lower * lower > best * (1.0 + 1e-9)) continue;  // see stepRay
-          double d2;
-          const glm::dvec2 c = closestInConvex(piece.v, want, d2);
-          if (d2 < best) {
-            best = d2;
-            eye2 = pullTowards(c, piece.centroid, 0.0, region_inset);
-          }
-        }
-        sc.eyes.push_back(eyeAt(eye2));
+        const std::optional<glm::dvec2> eye2 =
+            nearestInPieces(sc.pieces, {in_front.x, in_front.z}, region_inset, nullptr, 0.0, sc.clip);
+        sc.eyes.push_back(eyeAt(eye2.value_or(glm::dvec2(0.0))));
       }
     }
     // Inside: stratified over the area (1D strata over the pieces' cumulative area, jittered).
@@ -940,25 +953,9 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     const double offset = margin * glm::length(dir) / to_hit;
     const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
     const double c0 = sgn * (mn.y * (height - a.y) - mn.x * a.x - mn.z * a.z) - offset;
-    double best = std::numeric_limits<double>::infinity();
-    glm::dvec2 e2{0.0};
-    const glm::dvec2 from{pa.eye.x, pa.eye.z};
-    for (const auto& piece : sc.pieces) {
-      // A piece whose bounding circle lies farther than the best point so far cannot hold a
-      // nearer one (regions of a Freedoom level have hundreds of pieces). The factor keeps the
-      // rounding of the bound (~1e-16 relative) from skipping a piece that ties.
-      const double lower = glm::length(from - piece.centroid) - piece.radius;
-      if (lower > 0.0 && lower * lower > best * (1.0 + 1e-9)) continue;
-      if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
-      double d2c;
-      const glm::dvec2 c = closestInConvex(sc.clip, from, d2c);
-      if (d2c < best) {
-        best = d2c;
-        e2 = pullTowards(c, piece.centroid, 0.0, region_inset);
-      }
-    }
-    if (!(best < std::numeric_limits<double>::infinity())) return false;
-    const glm::dvec3 e3 = eyeAt(e2);
+    const std::optional<glm::dvec2> e2 = nearestInPieces(sc.pieces, {pa.eye.x, pa.eye.z}, region_inset, &g, c0, sc.clip);
+    if (!e2) return false;
+    const glm::dvec3 e3 = eyeAt(*e2);
     if (!(glm::length(e3 - pa.eye) > end_gap)) return false;
     e_out = e3, p_out = pa.target;
     return true;

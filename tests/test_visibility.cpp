@@ -95,6 +95,17 @@ std::optional<Box> randomBox(std::mt19937_64& rng) {
   return Box{{x0, x1, z0, z1}, Region{{{x0, z0}, {x1, z0}, {x1, z1}, {x0, z1}}}};
 }
 
+// `boxes` draws of randomBox, each (when not too thin) with `per_box` random fragments of
+// `fragments`: visit(box, fragment), which may draw from `rng` too.
+template <typename Visit>
+void forRandomBoxFragments(std::mt19937_64& rng, int boxes, int per_box, size_t fragments, Visit&& visit) {
+  for (int trial = 0; trial < boxes; ++trial) {
+    const std::optional<Box> box = randomBox(rng);
+    if (!box) continue;
+    for (int k = 0; k < per_box; ++k) visit(*box, static_cast<uint32_t>(rng() % fragments));
+  }
+}
+
 TEST(Visibility, ClosedWallHides) {
   const TwoRooms r = twoRooms(0.0);
   const BspTree bsp = buildBsp(r.scene);
@@ -174,28 +185,22 @@ TEST(Visibility, HiddenFromRegionIsHiddenFromSubRegions) {
     const VisibilityScene vis = VisibilityScene::build(bsp, opt);
     std::mt19937_64 rng(seed * 77);
     VisibilityCounters c;
-    for (int trial = 0; trial < 40; ++trial) {
-      const std::optional<Box> box = randomBox(rng);
-      if (!box) continue;
-      const auto [x0, x1, z0, z1] = box->bounds;
-      const Region& region = box->region;
-      for (int k = 0; k < 10; ++k) {
-        const uint32_t f = static_cast<uint32_t>(rng() % bsp.fragments.size());
-        if (vis.visibleFromRegion(f, region, 1.5, c)) continue;
-        ++hidden_pairs;
-        for (int sub = 0; sub < 4; ++sub) {
-          std::uniform_real_distribution<double> ux(x0, x1), uz(z0, z1);
-          double a = ux(rng), b = ux(rng), p = uz(rng), q = uz(rng);
-          if (a > b) std::swap(a, b);
-          if (p > q) std::swap(p, q);
-          const Region subregion{{{a, p}, {b, p}, {b, q}, {a, q}}};
-          ++checked;
-          EXPECT_FALSE(vis.visibleFromRegion(f, subregion, 1.5, c))
-              << "seed " << seed << " fragment " << f << " region [" << x0 << "," << x1 << "]x[" << z0 << ","
-              << z1 << "] sub [" << a << "," << b << "]x[" << p << "," << q << "]";
-        }
+    forRandomBoxFragments(rng, 40, 10, bsp.fragments.size(), [&](const Box& box, uint32_t f) {
+      const auto [x0, x1, z0, z1] = box.bounds;
+      if (vis.visibleFromRegion(f, box.region, 1.5, c)) return;
+      ++hidden_pairs;
+      for (int sub = 0; sub < 4; ++sub) {
+        std::uniform_real_distribution<double> ux(x0, x1), uz(z0, z1);
+        double a = ux(rng), b = ux(rng), p = uz(rng), q = uz(rng);
+        if (a > b) std::swap(a, b);
+        if (p > q) std::swap(p, q);
+        const Region subregion{{{a, p}, {b, p}, {b, q}, {a, q}}};
+        ++checked;
+        EXPECT_FALSE(vis.visibleFromRegion(f, subregion, 1.5, c))
+            << "seed " << seed << " fragment " << f << " region [" << x0 << "," << x1 << "]x[" << z0 << "," << z1
+            << "] sub [" << a << "," << b << "]x[" << p << "," << q << "]";
       }
-    }
+    });
   }
   EXPECT_GT(hidden_pairs, 20);  // the property was exercised
   EXPECT_GT(checked, 80);
@@ -277,24 +282,18 @@ TEST(Visibility, ProofNeverHidesWhatSamplingSees) {
     const VisibilityScene a = VisibilityScene::build(bsp, on);
     const VisibilityScene b = VisibilityScene::build(bsp, off);
     std::mt19937_64 rng(seed * 31);
-    for (int trial = 0; trial < 30; ++trial) {
-      const std::optional<Box> box = randomBox(rng);
-      if (!box) continue;
-      const auto [x0, x1, z0, z1] = box->bounds;
-      const Region& region = box->region;
-      for (int k = 0; k < 10; ++k) {
-        const uint32_t f = static_cast<uint32_t>(rng() % bsp.fragments.size());
-        VisibilityCounters ca, cb;
-        const bool va = a.visibleFromRegion(f, region, 1.5, ca);
-        const bool vb = b.visibleFromRegion(f, region, 1.5, cb);
-        ++compared;
-        if (!va) ++hidden;
-        if (!va && ca.rays < cb.rays) ++proved;
-        // (The proof's centre rays may find a real opening sampling misses: visible only with it is fine.)
-        EXPECT_FALSE(!va && vb) << "seed " << seed << " fragment " << f << " region [" << x0 << "," << x1 << "]x[" << z0
-                          << "," << z1 << "]";
-      }
-    }
+    forRandomBoxFragments(rng, 30, 10, bsp.fragments.size(), [&](const Box& box, uint32_t f) {
+      const auto [x0, x1, z0, z1] = box.bounds;
+      VisibilityCounters ca, cb;
+      const bool va = a.visibleFromRegion(f, box.region, 1.5, ca);
+      const bool vb = b.visibleFromRegion(f, box.region, 1.5, cb);
+      ++compared;
+      if (!va) ++hidden;
+      if (!va && ca.rays < cb.rays) ++proved;
+      // (The proof's centre rays may find a real opening sampling misses: visible only with it is fine.)
+      EXPECT_FALSE(!va && vb) << "seed " << seed << " fragment " << f << " region [" << x0 << "," << x1 << "]x[" << z0
+                              << "," << z1 << "]";
+    });
   }
   EXPECT_GT(compared, 500);
   EXPECT_GT(hidden, 50);

@@ -3,7 +3,8 @@
 // pre-sampled eyes on its height plane, both with back faces skipped (the same sequence of
 // fragment ids). Counters: plane_tests = plane tests per query (PFD: internal nodes on the path;
 // BSP: one side test per node visited, i.e. every node), ids = fragment ids per query, runs =
-// runs per query (pfdQueryRuns).
+// runs per query (pfdQueryRuns), ref_ranges = ranges of run_refs per query (pfdQueryRefs: the
+// walk alone, its answer unexpanded).
 //
 //   bench_pfd [--scenes=gen:office,freedoom2.wad:MAP01] [--level=largest|INDEX] [--eyes=4096]
 //             [--share-min=64 (PfdOptions::share_min; 4294967295: flat runs only)]
@@ -134,6 +135,29 @@ void benchPfdQueryRuns(benchmark::State& state, std::shared_ptr<BenchLevel> b) {
   state.counters["runs"] = benchmark::Counter(run_count, benchmark::Counter::kAvgIterations);
 }
 
+// The walk alone (pfdQueryRefs): the ranges of run_refs on the path, nothing expanded
+// (ref_ranges = ranges per query; ids is left 0: the order they describe is pfdQueryRuns' ids).
+// walk = true: the eyes of the small-step walk (nodes near the path stay in cache, as in a
+// walkthrough); false: independent random eyes over all cells (each step down is mostly a cache
+// miss: the office's 64 cell trees hold ~0.5 GB).
+void benchPfdQueryRefs(benchmark::State& state, std::shared_ptr<BenchLevel> b, bool walk) {
+  const auto& eyes = walk ? b->walk : b->eyes;
+  const auto& trees = walk ? b->walk_trees : b->trees;
+  std::vector<PfdRefRange> lists;
+  lists.reserve(256);
+  size_t k = 0;
+  double tests = 0, ranges = 0;
+  for (auto _ : state) {
+    const PfdQueryResult q = pfdQueryRefs(*trees[k], eyes[k], lists);
+    benchmark::DoNotOptimize(lists.data());
+    tests += q.tests;
+    ranges += static_cast<double>(lists.size());
+    k = k + 1 == eyes.size() ? 0 : k + 1;
+  }
+  setCounters(state, tests, 0.0, *b);
+  state.counters["ref_ranges"] = benchmark::Counter(ranges, benchmark::Counter::kAvgIterations);
+}
+
 // walk = true: consecutive eyes a small step apart (the case frame coherence is for); false:
 // independent random eyes (its worst case).
 void benchPfdQueryCoherent(benchmark::State& state, std::shared_ptr<BenchLevel> b, bool walk) {
@@ -196,6 +220,8 @@ int main(int argc, char** argv) {
       const auto b = prepare(spec, level, eyes, share_min);
       benchmark::RegisterBenchmark((b->name + "/pfdQuery").c_str(), benchPfdQuery, b);
       benchmark::RegisterBenchmark((b->name + "/pfdQueryRuns").c_str(), benchPfdQueryRuns, b);
+      benchmark::RegisterBenchmark((b->name + "/pfdQueryRefs/random").c_str(), benchPfdQueryRefs, b, false);
+      benchmark::RegisterBenchmark((b->name + "/pfdQueryRefs/walk").c_str(), benchPfdQueryRefs, b, true);
       benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/random").c_str(), benchPfdQueryCoherent, b, false);
       benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/walk").c_str(), benchPfdQueryCoherent, b, true);
       benchmark::RegisterBenchmark((b->name + "/bspBackToFront").c_str(), benchBsp, b);

@@ -116,6 +116,31 @@ PfdQueryResult pfdQueryRunIds(const PfdTree& tree, const glm::dvec3& eye, std::v
   return walkRuns(tree, eye, [&](uint32_t run) { run_ids.push_back(run); });
 }
 
+PfdQueryResult pfdQueryRefs(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRefRange>& lists) {
+  lists.clear();
+  PfdQueryResult result;
+  if (tree.nodes.empty()) return result;
+  uint32_t i = 0;
+  for (;;) {
+    const PfdNode& node = tree.nodes[i];
+    if (node.ref_count > 0) lists.push_back({node.first_ref, node.ref_count});
+    if (node.front < 0) break;
+    const int s = planeSide(tree.planes[node.plane], eye);
+    ++result.tests;
+    result.on_line |= s == 0;
+    i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
+  }
+  return result;
+}
+
+void pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, std::vector<uint32_t>& run_ids) {
+  for (const PfdRefRange& l : lists) {
+    for (uint32_t r = l.first; r < l.first + l.count; ++r) {
+      forEachRun(tree, tree.run_refs[r], [&](uint32_t run) { run_ids.push_back(run); });
+    }
+  }
+}
+
 PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdCursor& cursor,
                                 std::vector<uint32_t>& order) {
   PfdQueryResult result;
@@ -211,6 +236,36 @@ void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed) {
     s.tests_max = std::max(s.tests_max, tests);
   }
   s.tests_mean = static_cast<double>(sum) / eyes;
+}
+
+double huffmanMeanDepth(std::span<const double> weights) {
+  std::vector<double> w;
+  double total = 0.0;
+  for (double x : weights) {
+    if (x > 0.0) {
+      w.push_back(x);
+      total += x;
+    }
+  }
+  if (w.size() < 2) return 0.0;
+  for (double& x : w) x /= total;
+  std::sort(w.begin(), w.end());
+  // Two queues (van Leeuwen 1976): merged weights come out in non-decreasing order, so the two
+  // least are always at the fronts. Each merge adds its weight once per level it sinks.
+  std::vector<double> merged;
+  merged.reserve(w.size());
+  size_t a = 0, b = 0;
+  auto take = [&]() {
+    if (b >= merged.size() || (a < w.size() && w[a] <= merged[b])) return w[a++];
+    return merged[b++];
+  };
+  double depth = 0.0;
+  for (size_t k = 1; k < w.size(); ++k) {
+    const double x = take() + take();
+    merged.push_back(x);
+    depth += x;
+  }
+  return depth;
 }
 
 const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye) {

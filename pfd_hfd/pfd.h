@@ -52,6 +52,22 @@ struct PfdOptions {
   // Scoring by the candidates still crossing each side (a·log2(1 + c)) or looking one split
   // further both did worse than the area balance alone (MAP01, 16 and 64 candidates).
   uint32_t candidates = 128;
+  // kBalanced, PFD (not HFD): candidates are also taken from beneath undecided lines, not only from
+  // the frontier of the traversal. Every BSP line that crosses a region is tested somewhere below
+  // it whatever the order, so testing a deeper line first changes neither the leaves nor the nodes,
+  // only how evenly the region is split. freedoom2 MAP17 (47 trees): nodes equal, area-weighted
+  // tests ÷ entropy 1.173 -> 1.107, trees above 1.3 × their entropy 11 -> 3, bytes +3.5%.
+  // Under HFD a subtree may turn out hidden below, and a line tested ahead of it would be a
+  // needless node: HFD keeps the frontier.
+  bool deep_candidates = true;
+  // kBalanced, PFD with deep_candidates: where the lines still to be tested in a region are at
+  // most this many, the next one is chosen by exhaustive search for the least area-weighted mean
+  // tests below (memoised over the decisions; in double precision, as it only picks which line to
+  // test: every classification stays exact). 0 = off. Small trees, whose few leaves are very
+  // unequal, are where the greedy even split is furthest from the optimum. search_work bounds the
+  // clips one tree may spend on it (then the greedy choice), so big trees pay a bounded amount.
+  uint32_t search_lines = 8;
+  uint64_t search_work = 200'000;
   bool dedup = true;         // store each distinct emitted run once (false: one run per emission)
   // PFD with dedup: a resolved subtree's order of at least this many ids is stored as a sequence
   // referring to its children's orders; shorter ones flat. Smaller: less memory, more (shorter)
@@ -99,6 +115,11 @@ struct PfdStats {
   double tests_mean = 0.0;        // over `stat_eyes` random eyes in the region
   uint64_t tests_max = 0;
   double tests_entropy_bound = 0.0;  // Σ −a·log2 a over leaf area fractions a
+  // The least mean tests of ANY binary decision tree with these leaves (Huffman's code over the
+  // leaf area fractions: no prefix code does better, and a decision tree is one). Between the
+  // entropy bound and the entropy bound + 1: on a tree with a few leaves of very unequal area
+  // (entropy below ~3 bits) no tree can reach 1.3 × the entropy, but it can reach this.
+  double tests_huffman_bound = 0.0;
   double region_area = 0.0;
   uint64_t visibility_tests = 0;   // HFD: fragment-versus-region queries
   uint64_t visibility_rays = 0;    // HFD: occlusion rays cast
@@ -186,6 +207,19 @@ PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vec
 // structures such as the backface list cullers (backface/list_cull.h), built over tree.runs.
 PfdQueryResult pfdQueryRunIds(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& run_ids);
 
+// The walk alone, without expanding anything: per node on the eye's path whose list is not empty,
+// the range of tree.run_refs holding its list, root first (cleared first; no allocation once it
+// has the capacity, at most depth_max + 1 ranges). This is the query's answer in James & Day's
+// sense, a handful of ranges: its cost is the tests, not the length of the order. Expanding the
+// ranges with pfdExpandRefs gives exactly pfdQueryRunIds's run ids.
+struct PfdRefRange {
+  uint32_t first = 0;  // tree.run_refs[first, first + count)
+  uint32_t count = 0;
+};
+PfdQueryResult pfdQueryRefs(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRefRange>& lists);
+// Appends the flat run indices (into tree.runs) that `lists` expand to, in order.
+void pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, std::vector<uint32_t>& run_ids);
+
 // Frame coherence: the path of the last query and where each node's list starts in `order`.
 // A query re-tests the path from the root and re-walks only from the first test whose side
 // changed, keeping the order before it.
@@ -202,6 +236,10 @@ glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state);
 
 // Recomputes stats.tests_mean / tests_max over `eyes` random eyes (seeded) and stats.bytes.
 void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed);
+
+// The least mean depth of a binary tree whose leaves have these weights (Huffman 1952; weights
+// >= 0, any scale: they are normalised; 0 for fewer than two positive weights). O(L log L).
+double huffmanMeanDepth(std::span<const double> weights);
 
 // ---- Levels, view cells and the tree file ----
 

@@ -8,6 +8,7 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 
 #include <algorithm>
+#include <bit>
 #include <cfloat>
 #include <chrono>
 #include <cmath>
@@ -938,8 +939,16 @@ class Builder {
     size_t examined = 0;
     const size_t max_examined = 8 * static_cast<size_t>(options_.candidates);
     const size_t lowest = hfd() && !stack.empty() ? stack.size() - 1 : 0;
+    const bool deep = options_.deep_candidates && !hfd();
+    cands_complete_ = deep;
     for (size_t k = stack.size(); k-- > lowest && result.size() < options_.candidates && examined < max_examined;) {
-      if (stack[k].emit_side != 0) continue;
+      if (stack[k].emit_side != 0) {
+        // A node's own fragments' lines (orientation 0) are not gathered here.
+        const BspNode& own = bsp_.nodes[stack[k].node];
+        for (uint32_t f = own.first_fragment; f < own.first_fragment + own.fragment_count; ++f)
+          if (frag_line_[f] != UINT32_MAX && frag_line_[f] != first && side(frag_line_[f], r) == kCross) cands_complete_ = false;
+        continue;
+      }
       queue.assign(1, stack[k].node);
       for (size_t q = 0; q < queue.size() && result.size() < options_.candidates && examined < max_examined; ++q) {
         const int32_t id = queue[q];
@@ -949,18 +958,157 @@ class Builder {
         const int s = side(static_cast<uint32_t>(id), r);
         if (s == kCross) {
           if (static_cast<uint32_t>(id) != first) result.push_back(static_cast<uint32_t>(id));
-          continue;  // what lies beyond it is only reached after it is decided
+          // Lines beyond it are reached by the traversal only after it is decided, but each is
+          // tested somewhere below anyway (PfdOptions::deep_candidates).
+          if (!deep) continue;
         }
         queue.push_back(bsp_.nodes[id].front);
         queue.push_back(bsp_.nodes[id].back);
       }
     }
+    if (result.size() >= options_.candidates || examined >= max_examined) cands_complete_ = false;
     return result;
+  }
+
+  // ---- Exhaustive choice on small regions (PfdOptions::search_lines) ----
+  // In double precision: it only decides WHICH crossing line to test next; every classification
+  // the tree relies on stays exact. A line counts as crossing a double region where it leaves a
+  // vertex strictly on each side. No tolerance: a line that cuts off only a sliver (of no area in
+  // double) must still be tested wherever it crosses, at the cost of every eye of the region it is
+  // tested in, and the search must see that to put it low in the tree; a touching line that
+  // rounding shows as crossing only makes the estimate pessimistic.
+  using DRegion = std::vector<std::vector<glm::dvec2>>;
+
+  static double lineValue(const Line& l, const glm::dvec2& p) { return l.a * p.x + l.b * p.y + l.c; }
+
+  static bool crossesD(const DRegion& r, const Line& l) {
+    bool pos = false, neg = false;
+    for (const auto& poly : r) {
+      for (const glm::dvec2& p : poly) {
+        const double v = lineValue(l, p);
+        pos |= v > 0.0;
+        neg |= v < 0.0;
+      }
+      if (pos && neg) return true;
+    }
+    return false;
+  }
+
+  static double areaD(const DRegion& r) {
+    double total = 0.0;
+    for (const auto& poly : r) {
+      double a = 0.0;
+      for (size_t i = 0; i < poly.size(); ++i) {
+        const glm::dvec2& u = poly[i];
+        const glm::dvec2& v = poly[(i + 1) % poly.size()];
+        a += u.x * v.y - v.x * u.y;
+      }
+      total += 0.5 * std::abs(a);
+    }
+    return total;
+  }
+
+  // Splits convex pieces by l (Sutherland–Hodgman on each side).
+  static void clipD(const DRegion& r, const Line& l, DRegion& front, DRegion& back) {
+    front.clear();
+    back.clear();
+    std::vector<glm::dvec2> f, b;
+    for (const auto& poly : r) {
+      f.clear();
+      b.clear();
+      for (size_t i = 0; i < poly.size(); ++i) {
+        const glm::dvec2& u = poly[i];
+        const glm::dvec2& v = poly[(i + 1) % poly.size()];
+        const double fu = lineValue(l, u), fv = lineValue(l, v);
+        if (fu >= 0) f.push_back(u);
+        if (fu <= 0) b.push_back(u);
+        if ((fu > 0 && fv < 0) || (fu < 0 && fv > 0)) {
+          const glm::dvec2 x = u + (fu / (fu - fv)) * (v - u);
+          f.push_back(x);
+          b.push_back(x);
+        }
+      }
+      if (f.size() >= 3) front.push_back(f);
+      if (b.size() >= 3) back.push_back(b);
+    }
+  }
+
+  struct SearchState {
+    const std::vector<uint32_t>* lines = nullptr;  // the candidate lines, by position
+    std::unordered_map<uint32_t, double> memo;     // decision code -> least Σ area × tests below
+    uint64_t work = 0;                             // clips made
+  };
+
+  // The least Σ over leaves of area × tests for the region r (area `area`), whose still-crossing
+  // candidates are the set bits of `mask`; `code` holds 2 bits per candidate position (1 front,
+  // 2 back) of the tests on the way here. *choice: the position to test first (if wanted).
+  double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, SearchState& st, int* choice) {
+    if (mask == 0) return 0.0;
+    if (!choice) {
+      if (auto it = st.memo.find(code); it != st.memo.end()) return it->second;
+    }
+    const std::vector<uint32_t>& lines = *st.lines;
+    double best = INFINITY;
+    int best_i = -1;
+    DRegion front, back;
+    for (uint32_t m = mask; m != 0; m &= m - 1) {
+      const int i = std::countr_zero(m);
+      const Line& l = lines_[lines[static_cast<size_t>(i)]];
+      clipD(r, l, front, back);
+      ++st.work;
+      const double af = areaD(front), ab = areaD(back);
+      uint32_t fm = 0, bm = 0;
+      for (uint32_t o = mask & ~(1u << i); o != 0; o &= o - 1) {
+        const int j = std::countr_zero(o);
+        const Line& lj = lines_[lines[static_cast<size_t>(j)]];
+        if (crossesD(front, lj)) fm |= 1u << j;
+        if (crossesD(back, lj)) bm |= 1u << j;
+      }
+      const double v = searchTests(front, af, fm, code | (1u << (2 * i)), st, nullptr) +
+                       searchTests(back, ab, bm, code | (2u << (2 * i)), st, nullptr);
+      if (v < best) {
+        best = v;
+        best_i = i;
+      }
+    }
+    const double result = best_i < 0 ? area : area + best;
+    if (choice) *choice = best_i;
+    else st.memo.emplace(code, result);
+    return result;
+  }
+
+  // The line to test first among `cands` (all the lines still to be tested in r) by exhaustive
+  // search, or UINT32_MAX when the search does not apply or its budget is spent.
+  uint32_t searchLine(const std::vector<uint32_t>& cands, const Region& r) {
+    if (options_.search_lines == 0 || cands.size() < 2 || search_work_ >= options_.search_work) return UINT32_MAX;
+    // One line per canonical plane: two BSP nodes on one plane are one test.
+    std::vector<uint32_t> lines;
+    for (uint32_t id : cands) {
+      bool dup = false;
+      for (uint32_t o : lines) dup |= lines_[o].canon == lines_[id].canon;
+      if (!dup) lines.push_back(id);
+      if (lines.size() > options_.search_lines) return UINT32_MAX;
+    }
+    if (lines.size() < 2) return UINT32_MAX;
+    const DRegion dr = rings(r);
+    SearchState st;
+    st.lines = &lines;
+    uint32_t mask = 0;
+    for (size_t i = 0; i < lines.size(); ++i)
+      if (crossesD(dr, lines_[lines[i]])) mask |= 1u << i;
+    int choice = -1;
+    searchTests(dr, areaD(dr), mask, 0, st, &choice);
+    search_work_ += st.work;
+    return choice < 0 ? UINT32_MAX : lines[static_cast<size_t>(choice)];
   }
 
   uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r) {
     const std::vector<uint32_t> cands = candidates(first, stack, r);
     if (cands.size() == 1) return first;
+    if (cands_complete_ && !hfd()) {
+      const uint32_t found = searchLine(cands, r);
+      if (found != UINT32_MAX) return found;
+    }
     double total = 0.0;
     for (const Piece& p : r) total += pieceArea(p);
     uint32_t best = first;
@@ -975,6 +1123,9 @@ class Builder {
     }
     return best;
   }
+
+  bool cands_complete_ = false;  // the last candidates() call found every line still to be tested
+  uint64_t search_work_ = 0;      // clips made by searchLine in this tree
 
   uint32_t testPlaneIndex(uint32_t line) {
     if (test_plane_[line] == UINT32_MAX) {
@@ -1227,6 +1378,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
     }
   }
   s.tests_entropy_bound = entropy;
+  s.tests_huffman_bound = huffmanMeanDepth(builder.leaf_areas);
   tree.nodes.shrink_to_fit();
   tree.run_refs.shrink_to_fit();
   tree.runs.shrink_to_fit();

@@ -110,7 +110,7 @@ void writeTree(Writer& w, const PfdTree& t) {
                      s.runs, s.seqs, s.seq_items, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max, s.visibility_tests,
                      s.visibility_rays, s.hidden_rejected})
     w.put(v);
-  for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, 0.0}) w.put(v);
+  for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, s.tests_huffman_bound}) w.put(v);
 }
 
 PfdTree readTree(Reader& r, size_t fragments) {
@@ -179,8 +179,9 @@ PfdTree readTree(Reader& r, size_t fragments) {
                       &s.pool_entries, &s.runs, &s.seqs, &s.seq_items, &s.test_planes, &s.exact_fallbacks, &s.touching, &s.decisions,
                       &s.tests_max, &s.visibility_tests, &s.visibility_rays, &s.hidden_rejected})
     *v = r.get<uint64_t>();
-  double unused = 0.0;
-  for (double* v : {&s.tests_mean, &s.tests_entropy_bound, &s.region_area, &s.build_seconds, &unused})
+  // The last slot was written as 0 before tests_huffman_bound had it (same format version): 0 then
+  // reads as "not computed".
+  for (double* v : {&s.tests_mean, &s.tests_entropy_bound, &s.region_area, &s.build_seconds, &s.tests_huffman_bound})
     *v = r.getFinite();
 
   // What a query relies on.

@@ -110,6 +110,15 @@ CheckResult checkTree(const BspTree& bsp, const PfdTree& tree, uint32_t eyes, ui
       from_runs.insert(from_runs.end(), tree.fragment_ids.begin() + run.first,
                        tree.fragment_ids.begin() + run.first + run.count);
     EXPECT_EQ(from_runs, pfd);
+    // The unexpanded answer: a range per path node with a list, the same tests, the same runs.
+    std::vector<PfdRefRange> lists;
+    std::vector<uint32_t> run_ids, from_refs;
+    const PfdQueryResult qr = pfdQueryRefs(tree, eye, lists);
+    EXPECT_EQ(qr.tests, q.tests);
+    EXPECT_LE(lists.size(), q.tests + 1);
+    pfdQueryRunIds(tree, eye, run_ids);
+    pfdExpandRefs(tree, lists, from_refs);
+    EXPECT_EQ(from_refs, run_ids);
     if (q.on_line || onSomeVerticalPlane(bsp, eye)) {
       ++r.skipped;
       continue;
@@ -146,6 +155,10 @@ void checkStructure(const BspTree& bsp, const PfdTree& tree) {
   EXPECT_LE(tree.stats.tests_max, bsp.nodes.size() + bsp.fragments.size());
   // No decision tree over these leaves does better on average than their entropy (sampling noise aside).
   EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_entropy_bound);
+  // Huffman's optimum lies between the entropy and the entropy + 1, and no tree beats it either.
+  EXPECT_GE(tree.stats.tests_huffman_bound, tree.stats.tests_entropy_bound - 1e-9);
+  EXPECT_LE(tree.stats.tests_huffman_bound, tree.stats.tests_entropy_bound + 1.0 + 1e-9);
+  EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_huffman_bound);
   EXPECT_LE(tree.stats.pool_entries, tree.stats.list_fragments);
   EXPECT_GT(tree.stats.bytes, 0u);
 }
@@ -175,11 +188,12 @@ TEST(Pfd, RandomBuildingsMatchBspOrder) {
 
 // The test-line heuristic changes only the order of the tests: without HFD the leaves are the
 // cells of the crossing lines whatever the order, so nodes and the entropy bound are the same for
-// every heuristic, and the orders still equal the BSP's. More candidates for kBalanced give more
-// even splits and so fewer tests on average (summed over seeds: a greedy choice is not better on
+// every heuristic, and the orders still equal the BSP's. More candidates for kBalanced (more of
+// them, or from beneath undecided lines too: deep_candidates) give more even splits and so fewer
+// tests on average (summed over seeds: a greedy choice is not better on
 // every single tree), and the default stays within 1.3 × the entropy bound (issue 4's target).
 TEST(Pfd, BalancedCandidatesFewerTestsSameLeaves) {
-  double traversal_tests = 0.0, few_tests = 0.0, default_tests = 0.0, entropy = 0.0;
+  double traversal_tests = 0.0, few_tests = 0.0, frontier_tests = 0.0, default_tests = 0.0, entropy = 0.0;
   for (uint64_t seed = 1; seed <= 3; ++seed) {
     const Scene scene = loadScene("gen:office?rooms=10&seed=" + std::to_string(seed));
     const BspTree bsp = buildBsp(scene);
@@ -193,11 +207,16 @@ TEST(Pfd, BalancedCandidatesFewerTestsSameLeaves) {
     ASSERT_GT(defaults.candidates, few.candidates);
     const PfdTree t = buildPfd(bsp, level.walkable, height, std::nullopt, traversal);
     const PfdTree f = buildPfd(bsp, level.walkable, height, std::nullopt, few);
+    PfdOptions frontier;
+    frontier.deep_candidates = false;
+    ASSERT_TRUE(defaults.deep_candidates);
+    const PfdTree fr = buildPfd(bsp, level.walkable, height, std::nullopt, frontier);
     const PfdTree d = buildPfd(bsp, level.walkable, height, std::nullopt, defaults);
     SCOPED_TRACE("seed " + std::to_string(seed));
     ASSERT_GT(d.stats.leaves, 1000u);  // big enough for the choice to matter
     EXPECT_EQ(t.stats.leaves, d.stats.leaves);
     EXPECT_EQ(f.stats.leaves, d.stats.leaves);
+    EXPECT_EQ(fr.stats.leaves, d.stats.leaves);
     EXPECT_NEAR(t.stats.tests_entropy_bound, d.stats.tests_entropy_bound, 1e-9 * d.stats.tests_entropy_bound);
     EXPECT_EQ(d.stats.nodes, 2 * d.stats.leaves - 1);
     const CheckResult r = checkTree(bsp, d, 500, seed);
@@ -205,13 +224,16 @@ TEST(Pfd, BalancedCandidatesFewerTestsSameLeaves) {
     EXPECT_GT(r.eyes, 450u);
     traversal_tests += t.stats.tests_mean;
     few_tests += f.stats.tests_mean;
+    frontier_tests += fr.stats.tests_mean;
     default_tests += d.stats.tests_mean;
     entropy += d.stats.tests_entropy_bound;
   }
-  std::printf("mean tests summed over 3 seeds: traversal %.3f, 16 candidates %.3f, default %.3f; entropy %.3f\n",
-              traversal_tests, few_tests, default_tests, entropy);
+  std::printf("mean tests summed over 3 seeds: traversal %.3f, 16 candidates %.3f, frontier only %.3f, default %.3f; "
+              "entropy %.3f\n", traversal_tests, few_tests, frontier_tests, default_tests, entropy);
   EXPECT_LT(few_tests, traversal_tests);
+  EXPECT_LT(frontier_tests, traversal_tests);
   EXPECT_LT(default_tests, few_tests);
+  EXPECT_LT(default_tests, frontier_tests);
   EXPECT_LE(default_tests, 1.3 * entropy);
 }
 
@@ -429,6 +451,49 @@ TEST(Pfd, HfdDropsClosedRoom) {
   }
 }
 
+// The exhaustive choice on small regions (PfdOptions::search_lines) changes only the order of the
+// tests: same leaves, orders equal the BSP's, and on trees small enough to be searched at every
+// node no more tests than the greedy split (summed, strictly fewer). 1% slack per tree: the search
+// minimises area-weighted tests on double regions; tests_mean samples 10,000 eyes.
+TEST(Pfd, SearchedSmallTreesNoMoreTests) {
+  double searched = 0.0, greedy = 0.0;
+  int trees = 0;
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    const Scene scene = randomBuilding(seed, 6, 1.5);
+    const BspTree bsp = buildBsp(scene);
+    const FloorLevel& level = scene.levels[0];
+    const double height = level.floor_y + scene.eye_height;
+    PfdOptions off;
+    off.search_lines = 0;
+    const PfdOptions on;
+    ASSERT_GT(on.search_lines, 0u);
+    const PfdTree a = buildPfd(bsp, level.walkable, height, std::nullopt, off);
+    const PfdTree b = buildPfd(bsp, level.walkable, height, std::nullopt, on);
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    EXPECT_EQ(a.stats.leaves, b.stats.leaves);
+    EXPECT_LE(b.stats.tests_mean, 1.01 * a.stats.tests_mean);
+    EXPECT_EQ(checkTree(bsp, b, 300, seed).mismatches, 0u);
+    searched += b.stats.tests_mean;
+    greedy += a.stats.tests_mean;
+    trees += b.stats.leaves > 2;
+  }
+  std::printf("mean tests summed over 12 small trees: greedy %.3f, searched %.3f\n", greedy, searched);
+  EXPECT_GE(trees, 6);
+  EXPECT_LT(searched, greedy);
+}
+
+// Huffman's mean depth on weights whose optimum is known by hand.
+TEST(Pfd, HuffmanBoundOnKnownWeights) {
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{}), 0.0);
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{3.0}), 0.0);
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{0.99, 0.01}), 1.0);  // entropy 0.08: 12x below
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{1, 1, 1, 1}), 2.0);
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{2, 1, 1, 0}), 1.5);  // zero weights are no leaves
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{1, 1, 1}), 5.0 / 3.0);
+  // 1, 1, 2, 4, 8 (of 16): a caterpillar, depths 4, 4, 3, 2, 1.
+  EXPECT_DOUBLE_EQ(huffmanMeanDepth(std::vector<double>{8, 1, 4, 2, 1}), (4 + 4 + 2 * 3 + 4 * 2 + 8 * 1) / 16.0);
+}
+
 TEST(Pfd, TreeFileRoundTripAndCorruption) {
   const Scene scene = randomBuilding(4, 10, 1.5);
   TreeFile file;
@@ -449,6 +514,7 @@ TEST(Pfd, TreeFileRoundTripAndCorruption) {
   const PfdTree& b = back.levels[0].cells[0];
   EXPECT_EQ(a.nodes.size(), b.nodes.size());
   EXPECT_EQ(a.fragment_ids, b.fragment_ids);
+  EXPECT_EQ(a.stats.tests_huffman_bound, b.stats.tests_huffman_bound);
   EXPECT_EQ(back.bsp.fragments.size(), file.bsp.fragments.size());
   EXPECT_EQ(back.kind, TreeKind::kHfd);
   EXPECT_STREQ(treeKindName(back.kind), "hfd");

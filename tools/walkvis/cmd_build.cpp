@@ -82,12 +82,15 @@ VisibilityOptions parseSamples(const std::string& text, VisibilityOptions option
 }
 
 struct QueryTiming {
-  double pfd_ns = 0.0, runs_ns = 0.0, bsp_ns = 0.0;
+  double pfd_ns = 0.0, runs_ns = 0.0, refs_ns = 0.0, bsp_ns = 0.0;
   double runs_mean = 0.0;  // runs per query
+  double refs_mean = 0.0;  // ranges of run_refs per query (pfdQueryRefs)
 };
 
 // Mean wall time of one query at random eyes of the tree's region: the PFD walk against the BSP
-// traversal it replaces (both with back faces skipped).
+// traversal it replaces (both with back faces skipped). pfd_ns writes out the whole order (ids),
+// runs_ns its flat runs, refs_ns only the handful of run_refs ranges on the path (pfdQueryRefs:
+// the walk itself, whose cost does not grow with the length of the order).
 QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) {
   QueryTiming t;
   if (tree.region.empty() || eyes == 0) return t;
@@ -115,6 +118,15 @@ QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) 
     run_count += runs.size();
   }
   auto t3 = std::chrono::steady_clock::now();
+  std::vector<PfdRefRange> lists;
+  uint64_t list_count = 0;
+  for (const glm::dvec3& e : points) {
+    sink += pfdQueryRefs(tree, e, lists).tests;
+    list_count += lists.size();
+  }
+  auto t4 = std::chrono::steady_clock::now();
+  t.refs_ns = std::chrono::duration<double, std::nano>(t4 - t3).count() / eyes;
+  t.refs_mean = static_cast<double>(list_count) / eyes;
   t.runs_ns = std::chrono::duration<double, std::nano>(t3 - t2).count() / eyes;
   t.runs_mean = static_cast<double>(run_count) / eyes;
   t.pfd_ns = std::chrono::duration<double, std::nano>(t1 - t0).count() / eyes;
@@ -231,6 +243,7 @@ int runBuild(const BuildArgs& args) {
       e["tests_mean"] = s.tests_mean;
       e["tests_max"] = s.tests_max;
       e["tests_entropy_bound"] = s.tests_entropy_bound;
+      e["tests_huffman_bound"] = s.tests_huffman_bound;
       e["nodes"] = s.nodes;
       e["list_entries"] = s.list_entries;
       e["list_fragments"] = s.list_fragments;
@@ -262,6 +275,8 @@ int runBuild(const BuildArgs& args) {
       e["query_ns"] = qt.pfd_ns;
       e["query_runs_ns"] = qt.runs_ns;
       e["runs_per_query"] = qt.runs_mean;
+      e["query_refs_ns"] = qt.refs_ns;
+      e["ref_ranges_per_query"] = qt.refs_mean;
       e["bsp_query_ns"] = qt.bsp_ns;
       e["bsp_tests"] = file.bsp.stats.nodes;
       e["region_area"] = s.region_area;
@@ -297,15 +312,17 @@ int runBuild(const BuildArgs& args) {
   if (over_bound > 0)
     std::printf("warning: %llu trees store more than N^1.5 log_{4/3} n entries\n",
                 static_cast<unsigned long long>(over_bound));
-  std::printf("%5s %4s %9s %9s %6s %8s %10s %11s %12s %12s %8s %9s %9s\n", "level", "cell", "height", "tests", "max",
-              "entropy", "nodes", "list_refs", "pool", "bytes", "seconds", "query_ns", "bsp_ns");
+  std::printf("%5s %4s %9s %9s %6s %8s %8s %10s %11s %12s %12s %8s %9s %8s %9s\n", "level", "cell", "height", "tests",
+              "max", "entropy", "huffman", "nodes", "list_refs", "pool", "bytes", "seconds", "query_ns", "refs_ns",
+              "bsp_ns");
   for (const auto& e : trees)
-    std::printf("%5d %4d %9.6g %9.2f %6d %8.2f %10llu %11llu %12llu %12llu %8.3f %9.0f %9.0f\n", e["level"].get<int>(),
-                e["cell"].get<int>(), e["height"].get<double>(), e["tests_mean"].get<double>(),
+    std::printf("%5d %4d %9.6g %9.2f %6d %8.2f %8.2f %10llu %11llu %12llu %12llu %8.3f %9.0f %8.0f %9.0f\n",
+                e["level"].get<int>(), e["cell"].get<int>(), e["height"].get<double>(), e["tests_mean"].get<double>(),
                 e["tests_max"].get<int>(), e["tests_entropy_bound"].get<double>(),
-                e["nodes"].get<unsigned long long>(), e["list_entries"].get<unsigned long long>(),
-                e["pool_entries"].get<unsigned long long>(), e["bytes"].get<unsigned long long>(),
-                e["build_seconds"].get<double>(), e["query_ns"].get<double>(), e["bsp_query_ns"].get<double>());
+                e["tests_huffman_bound"].get<double>(), e["nodes"].get<unsigned long long>(),
+                e["list_entries"].get<unsigned long long>(), e["pool_entries"].get<unsigned long long>(),
+                e["bytes"].get<unsigned long long>(), e["build_seconds"].get<double>(), e["query_ns"].get<double>(),
+                e["query_refs_ns"].get<double>(), e["bsp_query_ns"].get<double>());
   return 0;
 }
 

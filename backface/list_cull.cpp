@@ -7,13 +7,16 @@
 //
 // A range must come out in its own order (it is a priority list: painter's order), so per range the
 // per-frame state is laid out by position in the range:
-//   polygon/region: the plane (n, d) per position, in double, evaluated exactly as isFrontFacing();
+//   polygon/region (and mask's plane-test chunks): the distinct planes of the listed polygons, in
+//     double, and each polygon's plane id; per call each distinct plane is tested once, exactly as
+//     isFrontFacing(), and each position looks its byte up (see "The batched per-frame passes");
 //   mask: the 2-byte cluster id per position and one bounding sphere per chunk of the range (the
 //     paper's per-group view cone, §3.2; chunks of mask_group_size positions, 0 = the whole range);
 //     per frame one table per chunk from the cone from the eye around its sphere. A chunk of fewer
-//     than mask_list_min_chunk positions gets the plane test instead: a table costs ~1 us, the
-//     plane test ~1 ns per polygon, and PFD runs average under 2 fragments, so a table per run
-//     (57 ns per listed polygon measured on Freedoom MAP01) can never pay there. No table can be
+//     than mask_list_min_chunk positions gets the plane test instead (so on PFD lists, whose runs
+//     are far shorter than the default 512, "mask" IS the plane test; the bench prints the share
+//     of positions a table culls): a table costs ~1 us, and a table per run (20-30 ns per listed
+//     polygon measured on Freedoom MAP01, mask-tables) can never pay there. No table can be
 //     shared by the runs of a frame either: it needs one cone holding every direction from the
 //     eye to the polygons it tests, and for an eye inside the building that is the whole sphere
 //     (an empty mask). Zhang & Hoff's masks are a whole-object method: they pay on big groups;
@@ -25,16 +28,27 @@
 //     walkthrough are inside it) unless the options name an eye box: with the paper's box around
 //     each cluster's origin, gen:office's walls merged into 6 clusters, one per orientation, and
 //     an eye inside culled none of them (0 per frame in z-buffer mode; backface.h).
-// Survivors are appended by a branch-free compaction into `out`.
+// cullRanges takes all runs of a query in one call (the method picked once, one resize of `out`,
+// survivors written through a raw cursor without a branch per element); cullRange is its one-run
+// case.
 #include "backface/list_cull.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include <glm/geometric.hpp>
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define WALKVIS_LIST_CULL_X86 1
+#endif
+
 #include "backface/normal_mask.h"
+#include "backface/spread_bits.h"
 
 namespace walkvis {
 
@@ -105,48 +119,252 @@ MaskChunk boundChunk(const BackfaceInput& input, std::span<const uint32_t> indic
   return c;
 }
 
+// ---- The batched per-frame passes (cullRanges). A PFD query on Freedoom MAP01 lists ~2,300 of
+// its tree's ~19,600 positions in ~80 runs (~30 positions each) of its ~900; the ~2,300 fragments
+// lie on only 595 distinct planes (a Doom level's walls, floors and ceilings). So per call each
+// distinct plane is tested once, SIMD where the CPU has it (the same double expression as
+// isFrontFacing(), so the same result bit for bit), into a byte per plane, and every listed
+// position looks its polygon's plane's byte up: no per-position plane data (the index array is
+// read anyway), two lookups in tables that sit in L1. A call listing few positions against many
+// planes (or more planes than the stack table holds) tests each listed position's plane directly.
+// The unculled copy (none) moves 8 entries per step (the index array carries kPad trailing
+// entries, the output kListCullOutSlack spare ones for the overshoot).
+
+constexpr uint32_t kPad = 8;  // trailing entries of the index and plane arrays: one 8-lane step
+static_assert(kListCullOutSlack >= kPad);
+constexpr uint32_t kMaxTablePlanes = 1u << 14;  // a 16 KiB byte table on the stack
+
+// The distinct planes (structure of arrays, kPad trailing zero planes: 0 > 0, never front), the
+// plane id of each polygon and the index array (kPad trailing zeros).
+struct PlaneArrays {
+  const double* x;
+  const double* y;
+  const double* z;
+  const double* d;
+  uint32_t planes;
+  const uint32_t* poly_plane;  // by polygon index
+  const uint32_t* idx;
+};
+
+// Range ids[k] of `spans` for k < n, unculled.
+uint32_t* copyRuns(const uint32_t* idx, const IndexRange* spans, const uint32_t* ids, size_t n, uint32_t* dst) {
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    const uint32_t* src = idx + s.first;
+    uint32_t left = s.count;
+    for (;;) {
+      std::memcpy(dst, src, 8 * sizeof(uint32_t));
+      if (left <= 8) {
+        dst += left;
+        break;
+      }
+      dst += 8;
+      src += 8;
+      left -= 8;
+    }
+  }
+  return dst;
+}
+
+// isFrontFacing() of plane p: the same expression as glm::dot, (x + y) + z (the baseline target
+// has no FMA to contract it into).
+inline bool planeFront(const PlaneArrays& a, uint32_t p, double ex, double ey, double ez) {
+  return (a.x[p] * ex + a.y[p] * ey) + a.z[p] * ez > a.d[p];
+}
+
+// The direct test: each listed position's plane, scalar.
+uint32_t* directRuns(const PlaneArrays& a, const IndexRange* spans, const uint32_t* ids, size_t n,
+                     const glm::dvec3& eye, uint32_t* dst) {
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
+      *dst = a.idx[i];
+      dst += planeFront(a, a.poly_plane[a.idx[i]], eye.x, eye.y, eye.z) ? 1 : 0;
+    }
+  }
+  return dst;
+}
+
+// front[p] = 1 where plane p is front-facing, else 0, for p < a.planes.
+void frontTableScalar(const PlaneArrays& a, const glm::dvec3& eye, uint8_t* front) {
+  for (uint32_t p = 0; p < a.planes; ++p) front[p] = planeFront(a, p, eye.x, eye.y, eye.z) ? 1 : 0;
+}
+
+// The lookups: per position its polygon's plane's byte (both tables in L1), a branch-free append.
+// The scalar and AVX2 paths (AVX-512 and AVX2 gathers of the same two lookups measured no faster
+// and 2.3x slower on Freedoom MAP01, Zen 5).
+uint32_t* tableRuns(const PlaneArrays& a, const uint8_t* front, const IndexRange* spans, const uint32_t* ids,
+                    size_t n, uint32_t* dst) {
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
+      const uint32_t polygon = a.idx[i];
+      *dst = polygon;
+      dst += front[a.poly_plane[polygon]];
+    }
+  }
+  return dst;
+}
+
+#ifdef WALKVIS_LIST_CULL_X86
+// AVX2 without FMA (the target names none, so mul + add cannot be contracted): per lane the same
+// double operations in the same order as isFrontFacing().
+[[gnu::target("avx2,popcnt")]] void frontTableAvx2(const PlaneArrays& a, const glm::dvec3& eye, uint8_t* front) {
+  const __m256d ex = _mm256_set1_pd(eye.x), ey = _mm256_set1_pd(eye.y), ez = _mm256_set1_pd(eye.z);
+  for (uint32_t p = 0; p < a.planes; p += 8) {
+    uint32_t bits = 0;
+    for (uint32_t h = 0; h < 8; h += 4) {
+      const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(a.x + p + h), ex),
+                                                    _mm256_mul_pd(_mm256_loadu_pd(a.y + p + h), ey)),
+                                      _mm256_mul_pd(_mm256_loadu_pd(a.z + p + h), ez));
+      bits |= static_cast<uint32_t>(_mm256_movemask_pd(_mm256_cmp_pd(v, _mm256_loadu_pd(a.d + p + h), _CMP_GT_OQ))) << h;
+    }
+    std::memcpy(front + p, &kSpread[bits], 8);
+  }
+}
+
+// AVX-512F has FMA, so plain mul + add could be fused (rounding differently from
+// isFrontFacing()): the explicit-rounding forms (round to nearest, the default) are never fused.
+// Their zero-masking variants with a full mask: GCC 12's unmasked ones warn (an undefined source).
+[[gnu::target("avx512f,avx512vl,popcnt")]] void frontTableAvx512(const PlaneArrays& a, const glm::dvec3& eye,
+                                                                 uint8_t* front) {
+  constexpr int kRound = _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC;
+  constexpr __mmask8 kAll = 0xFF;
+  const __m512d ex = _mm512_set1_pd(eye.x), ey = _mm512_set1_pd(eye.y), ez = _mm512_set1_pd(eye.z);
+  for (uint32_t p = 0; p < a.planes; p += 8) {
+    const __m512d x = _mm512_maskz_mul_round_pd(kAll, _mm512_loadu_pd(a.x + p), ex, kRound);
+    const __m512d y = _mm512_maskz_mul_round_pd(kAll, _mm512_loadu_pd(a.y + p), ey, kRound);
+    const __m512d z = _mm512_maskz_mul_round_pd(kAll, _mm512_loadu_pd(a.z + p), ez, kRound);
+    const __m512d v = _mm512_maskz_add_round_pd(kAll, _mm512_maskz_add_round_pd(kAll, x, y, kRound), z, kRound);
+    const uint32_t bits = _mm512_cmp_pd_mask(v, _mm512_loadu_pd(a.d + p), _CMP_GT_OQ);
+    std::memcpy(front + p, &kSpread[bits], 8);
+  }
+}
+
+
+// The same lookups eight positions at a time into a lane mask, then one vpcompressd (register
+// form) of their indices: one store per eight positions instead of one per position.
+[[gnu::target("avx512f,avx512vl,popcnt")]] uint32_t* tableRunsAvx512(const PlaneArrays& a, const uint8_t* front,
+                                                                     const IndexRange* spans, const uint32_t* ids,
+                                                                     size_t n, uint32_t* dst) {
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    uint32_t at = s.first, left = s.count;
+    for (;;) {
+      const uint32_t* idx = a.idx + at;
+      uint32_t bits = 0;
+      for (uint32_t j = 0; j < 8; ++j) bits |= static_cast<uint32_t>(front[a.poly_plane[idx[j]]]) << j;
+      const __mmask8 keep = static_cast<__mmask8>(bits & ((1u << std::min(left, 8u)) - 1u));
+      const __m256i id = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(idx));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_maskz_compress_epi32(keep, id));
+      dst += _mm_popcnt_u32(keep);
+      if (left <= 8) break;
+      left -= 8;
+      at += 8;
+    }
+  }
+  return dst;
+}
+#endif
+
+enum class PlanePath : uint8_t { kScalar, kAvx2, kAvx512 };
+
+// The widest path the CPU has, at most what `simd` names (kAuto: AVX-512 where present; the
+// option has no AVX-512 value, so kAvx2 pins AVX2 and kSse2 and kScalar the scalar loops).
+PlanePath resolvePlanePath(BackfaceSimd simd) {
+#ifdef WALKVIS_LIST_CULL_X86
+  const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+  const bool avx512 = avx2 && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (simd == BackfaceSimd::kAuto) return avx512 ? PlanePath::kAvx512 : avx2 ? PlanePath::kAvx2 : PlanePath::kScalar;
+  if (simd == BackfaceSimd::kAvx2 && avx2) return PlanePath::kAvx2;
+#else
+  (void)simd;
+#endif
+  return PlanePath::kScalar;
+}
+
+// The plane test of runs ids[0, n), `listed` positions in all: the plane table where the call
+// lists at least a quarter as many positions as there are planes (a table entry costs about what
+// a direct test does; the lookups are far cheaper) and the table fits the stack, else direct.
+uint32_t* planeTestRuns(PlanePath path, const PlaneArrays& a, uint64_t listed, const IndexRange* spans,
+                        const uint32_t* ids, size_t n, const glm::dvec3& eye, uint32_t* dst) {
+  if (a.planes > kMaxTablePlanes || 4 * listed < a.planes) return directRuns(a, spans, ids, n, eye, dst);
+  std::array<uint8_t, kMaxTablePlanes + 8> front;  // + 8: the 8-plane steps write past a.planes
+  switch (path) {
+#ifdef WALKVIS_LIST_CULL_X86
+    case PlanePath::kAvx512:
+      frontTableAvx512(a, eye, front.data());
+      return tableRunsAvx512(a, front.data(), spans, ids, n, dst);
+    case PlanePath::kAvx2: frontTableAvx2(a, eye, front.data()); break;
+#endif
+    default: frontTableScalar(a, eye, front.data()); break;
+  }
+  return tableRuns(a, front.data(), spans, ids, n, dst);
+}
+
 }  // namespace
 
 struct ListCuller::Impl {
   ListCullMethod method = ListCullMethod::kNone;
-  std::vector<uint32_t> indices;
+  std::vector<uint32_t> indices;  // kPad trailing zeros
   std::vector<RangeState> ranges;
-  // polygon, region
+  std::vector<IndexRange> spans;  // per range, packed for the batched passes
+  uint32_t planes = 0;            // distinct planes (polygon, region, mask)
+  PlanePath path = PlanePath::kScalar;
+  // polygon, region, mask (its plane-test chunks): the distinct planes of the listed polygons
+  // (kPad trailing zero planes) and the plane of each position (kPad trailing zeros)
   std::vector<double> nx, ny, nz, d;
+  std::vector<uint32_t> poly_plane;  // by polygon index, up to the largest listed
   // mask
   std::unique_ptr<NormalMaskGrid> grid;
   std::vector<uint16_t> cell;
   std::vector<MaskChunk> chunks;
+  std::vector<uint8_t> table_range;  // per range: 1 where a chunk of it uses a table
+  bool any_table = false;
+  uint64_t table_positions = 0;
   // cluster, hierarchy
   std::vector<uint32_t> unit_of;
   mutable std::vector<uint8_t> unit_flags;  // scratch of the largest range's unit count
   uint64_t bytes = 0;
 
+  // The distinct planes (equal bit for bit: the same test result) and each position's.
   void storePlanes(const BackfaceInput& input, std::span<const uint32_t> idx) {
-    nx.resize(idx.size());
-    ny.resize(idx.size());
-    nz.resize(idx.size());
-    d.resize(idx.size());
-    for (size_t i = 0; i < idx.size(); ++i) {
+    using Key = std::array<uint64_t, 4>;
+    auto key = [&](uint32_t i) {
       const Plane& p = input.polygons[idx[i]].plane;
-      nx[i] = p.n.x;
-      ny[i] = p.n.y;
-      nz[i] = p.n.z;
-      d[i] = p.d;
+      return Key{std::bit_cast<uint64_t>(p.n.x), std::bit_cast<uint64_t>(p.n.y), std::bit_cast<uint64_t>(p.n.z),
+                 std::bit_cast<uint64_t>(p.d)};
+    };
+    std::vector<uint32_t> by_plane(idx.size());
+    for (uint32_t i = 0; i < by_plane.size(); ++i) by_plane[i] = i;
+    std::sort(by_plane.begin(), by_plane.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    uint32_t max_index = 0;
+    for (uint32_t i : idx) max_index = std::max(max_index, i);
+    poly_plane.assign(static_cast<size_t>(max_index) + 1, 0);
+    nx.clear();
+    ny.clear();
+    nz.clear();
+    d.clear();
+    for (size_t k = 0; k < by_plane.size(); ++k) {
+      if (k == 0 || key(by_plane[k]) != key(by_plane[k - 1])) {
+        const Plane& p = input.polygons[idx[by_plane[k]]].plane;
+        nx.push_back(p.n.x);
+        ny.push_back(p.n.y);
+        nz.push_back(p.n.z);
+        d.push_back(p.d);
+      }
+      poly_plane[idx[by_plane[k]]] = static_cast<uint32_t>(nx.size() - 1);
     }
+    planes = static_cast<uint32_t>(nx.size());
+    for (std::vector<double>* v : {&nx, &ny, &nz, &d}) v->resize(planes + kPad, 0.0);
   }
 
-  // The plane test of positions [first, first + count): survivors appended to out, culled returned.
-  uint32_t planeTest(uint32_t first, uint32_t count, const glm::dvec3& eye, std::vector<uint32_t>& out) const {
-    const double ex = eye.x, ey = eye.y, ez = eye.z;
-    const double* px = nx.data() + first;
-    const double* py = ny.data() + first;
-    const double* pz = nz.data() + first;
-    const double* pd = d.data() + first;
-    // Same expression as glm::dot (x + y) + z: equal to isFrontFacing() bit for bit.
-    return compact(indices.data() + first, count, out,
-                   [&](uint32_t i) { return (px[i] * ex + py[i] * ey) + pz[i] * ez > pd[i]; });
+  PlaneArrays arrays() const {
+    return {nx.data(), ny.data(), nz.data(), d.data(), planes, poly_plane.data(), indices.data()};
   }
+
+  // mask, one range with a table chunk: per chunk the table or (a small chunk) the plane test.
+  uint32_t* maskRange(const RangeState& rs, const glm::dvec3& eye, NormalMaskGrid::Table& table, uint32_t* dst) const;
 
   // Appends indices[first + i] for every i with keep(i) true, without a branch per element.
   template <typename Keep>
@@ -169,6 +387,9 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
                              const BackfaceOptions& options) {
   auto impl = std::make_unique<Impl>();
   impl->method = method;
+  if (indices.size() > UINT32_MAX - kPad) {
+    throw SceneError("backface list: " + std::to_string(indices.size()) + " indices; positions are 32-bit");
+  }
   impl->indices.assign(indices.begin(), indices.end());
   for (size_t i = 0; i < indices.size(); ++i) {
     if (indices[i] >= input.polygons.size()) {
@@ -200,13 +421,16 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
     impl->ranges[r].first = ranges[r].first;
     impl->ranges[r].count = ranges[r].count;
   }
+  impl->spans.assign(ranges.begin(), ranges.end());
+  impl->path = resolvePlanePath(options.simd);
   const size_t n = indices.size();
+  impl->indices.resize(n + kPad, 0);
   switch (method) {
     case ListCullMethod::kNone: break;
     case ListCullMethod::kPolygon:
     case ListCullMethod::kRegion: {
       impl->storePlanes(input, indices);
-      impl->bytes = n * 4 * sizeof(double);
+      impl->bytes = impl->poly_plane.size() * sizeof(uint32_t) + uint64_t{impl->planes} * 4 * sizeof(double);
       break;
     }
     case ListCullMethod::kMask: {
@@ -215,6 +439,7 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
       for (size_t i = 0; i < n; ++i) impl->cell[i] = impl->grid->cell(input.polygons[indices[i]].plane.n);
       std::vector<uint8_t> plane_at(n, 0);
       uint64_t table_chunks = 0;
+      impl->table_range.assign(impl->ranges.size(), 0);
       for (RangeState& rs : impl->ranges) {
         rs.chunk_begin = static_cast<uint32_t>(impl->chunks.size());
         const uint32_t size = options.mask_group_size == 0 ? std::max<uint32_t>(rs.count, 1) : options.mask_group_size;
@@ -233,11 +458,17 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
           }
         }
         rs.chunk_end = static_cast<uint32_t>(impl->chunks.size());
+        for (uint32_t c = rs.chunk_begin; c < rs.chunk_end; ++c) {
+          if (!impl->chunks[c].planes) impl->table_range[static_cast<size_t>(&rs - impl->ranges.data())] = 1;
+        }
       }
+      for (const MaskChunk& c : impl->chunks) impl->table_positions += c.planes ? 0 : c.end - c.begin;
+      impl->any_table = impl->table_positions > 0;
       impl->storePlanes(input, indices);
       uint64_t plane_positions = 0, cell_positions = 0;
       for (size_t i = 0; i < n; ++i) (plane_at[i] ? plane_positions : cell_positions) += 1;
-      impl->bytes = cell_positions * sizeof(uint16_t) + plane_positions * 4 * sizeof(double) +
+      impl->bytes = cell_positions * sizeof(uint16_t) + (plane_positions ? impl->poly_plane.size() * sizeof(uint32_t) : 0) +
+                    uint64_t{impl->planes} * 4 * sizeof(double) +
                     table_chunks * (sizeof(glm::dvec3) + sizeof(double));
       break;
     }
@@ -304,59 +535,107 @@ ListCullMethod ListCuller::method() const { return impl_->method; }
 size_t ListCuller::rangeCount() const { return impl_->ranges.size(); }
 uint64_t ListCuller::bytes() const { return impl_->bytes; }
 
-uint32_t ListCuller::cullRange(uint32_t range, const BackfaceView& view, std::vector<uint32_t>& out) const {
-  const Impl& m = *impl_;
-  if (range >= m.ranges.size()) {
-    throw SceneError("backface list: range " + std::to_string(range) + " of " + std::to_string(m.ranges.size()));
-  }
-  const RangeState& rs = m.ranges[range];
-  const uint32_t* idx = m.indices.data() + rs.first;
-  switch (m.method) {
-    case ListCullMethod::kNone:
-      out.insert(out.end(), idx, idx + rs.count);
-      return 0;
-    case ListCullMethod::kPolygon:
-    case ListCullMethod::kRegion:
-      return m.planeTest(rs.first, rs.count, view.eye, out);
-    case ListCullMethod::kMask: {
-      uint32_t culled = 0;
-      NormalMaskGrid::Table table;
-      for (uint32_t c = rs.chunk_begin; c < rs.chunk_end; ++c) {
-        const MaskChunk& chunk = m.chunks[c];
-        const uint32_t count = chunk.end - chunk.begin;
-        if (chunk.planes) {
-          culled += m.planeTest(chunk.begin, count, view.eye, out);
-          continue;
-        }
-        glm::dvec3 axis;
-        double sin_theta = 0.0;
-        if (!sphereCone(view.eye, chunk.center, chunk.radius, axis, sin_theta)) {
-          out.insert(out.end(), m.indices.data() + chunk.begin, m.indices.data() + chunk.end);
-          continue;
-        }
-        m.grid->backTable(axis, sin_theta, table);
-        const uint16_t* cell = m.cell.data() + chunk.begin;
-        const uint8_t* t = table.data();
-        culled += Impl::compact(m.indices.data() + chunk.begin, count, out, [&](uint32_t i) { return t[cell[i]] == 0; });
-      }
-      return culled;
+uint64_t ListCuller::maskTablePositions() const { return impl_->table_positions; }
+
+uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& eye, NormalMaskGrid::Table& table,
+                                      uint32_t* dst) const {
+  for (uint32_t c = rs.chunk_begin; c < rs.chunk_end; ++c) {
+    const MaskChunk& chunk = chunks[c];
+    const uint32_t* idx = indices.data() + chunk.begin;
+    const uint32_t count = chunk.end - chunk.begin;
+    if (chunk.planes) {
+      const IndexRange span{chunk.begin, count};
+      const uint32_t zero = 0;
+      dst = planeTestRuns(path, arrays(), count, &span, &zero, 1, eye, dst);
+      continue;
     }
-    case ListCullMethod::kCluster:
-    case ListCullMethod::kHierarchy: {
-      if (rs.count == 0) return 0;
+    glm::dvec3 axis;
+    double sin_theta = 0.0;
+    if (!sphereCone(eye, chunk.center, chunk.radius, axis, sin_theta)) {
+      std::memcpy(dst, idx, count * sizeof(uint32_t));
+      dst += count;
+      continue;
+    }
+    grid->backTable(axis, sin_theta, table);
+    const uint16_t* cl = cell.data() + chunk.begin;
+    const uint8_t* t = table.data();
+    for (uint32_t i = 0; i < count; ++i) {
+      *dst = idx[i];
+      dst += t[cl[i]] == 0 ? 1 : 0;
+    }
+  }
+  return dst;
+}
+
+uint32_t ListCuller::cullRange(uint32_t range, const BackfaceView& view, std::vector<uint32_t>& out) const {
+  return cullRanges(std::span<const uint32_t>(&range, 1), view, out);
+}
+
+uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const BackfaceView& view,
+                                std::vector<uint32_t>& out) const {
+  const Impl& m = *impl_;
+  const size_t range_count = m.spans.size();
+  uint64_t total = 0;
+  for (uint32_t r : range_ids) {
+    if (r >= range_count) {
+      throw SceneError("backface list: range " + std::to_string(r) + " of " + std::to_string(range_count));
+    }
+    total += m.spans[r].count;
+  }
+  if (m.method == ListCullMethod::kCluster || m.method == ListCullMethod::kHierarchy) {
+    // The method's own culler per range (its clusters are per range): one call each.
+    uint32_t culled = 0;
+    for (uint32_t r : range_ids) {
+      const RangeState& rs = m.ranges[r];
+      if (rs.count == 0) continue;
       const size_t units = rs.culler->unitCount();
       std::span<uint8_t> flags(m.unit_flags.data(), units);
       rs.culler->cull(view, flags);
       m.unit_flags[units] = 0;  // positions in no unit map here
       const uint32_t* unit_of = m.unit_of.data() + rs.unit_of;
       const uint8_t* f = m.unit_flags.data();
-      return Impl::compact(idx, rs.count, out, [&](uint32_t i) {
+      culled += Impl::compact(m.indices.data() + rs.first, rs.count, out, [&](uint32_t i) {
         const uint32_t u = unit_of[i];
         return f[u < units ? u : units] == 0;
       });
     }
+    return culled;
   }
-  return 0;
+  // One resize for the whole call (std::vector has no way to grow without value-initialising);
+  // the kernels then write through a raw cursor and may run kListCullOutSlack entries ahead.
+  const size_t base = out.size();
+  out.resize(base + total + kListCullOutSlack);
+  uint32_t* const start = out.data() + base;
+  uint32_t* dst = start;
+  const uint32_t* ids = range_ids.data();
+  const size_t n = range_ids.size();
+  switch (m.method) {
+    case ListCullMethod::kNone:
+      dst = copyRuns(m.indices.data(), m.spans.data(), ids, n, dst);
+      break;
+    case ListCullMethod::kPolygon:
+    case ListCullMethod::kRegion:
+      dst = planeTestRuns(m.path, m.arrays(), total, m.spans.data(), ids, n, view.eye, dst);
+      break;
+    case ListCullMethod::kMask: {
+      if (!m.any_table) {  // every chunk below mask_list_min_chunk: the plane test throughout
+        dst = planeTestRuns(m.path, m.arrays(), total, m.spans.data(), ids, n, view.eye, dst);
+        break;
+      }
+      NormalMaskGrid::Table table;
+      for (size_t k = 0; k < n; ++k) {
+        dst = m.table_range[ids[k]] ? m.maskRange(m.ranges[ids[k]], view.eye, table, dst)
+                                    : planeTestRuns(m.path, m.arrays(), m.spans[ids[k]].count, m.spans.data(), ids + k, 1,
+                                                    view.eye, dst);
+      }
+      break;
+    }
+    case ListCullMethod::kCluster:
+    case ListCullMethod::kHierarchy: break;  // above
+  }
+  const size_t kept = static_cast<size_t>(dst - start);
+  out.resize(base + kept);
+  return static_cast<uint32_t>(total - kept);
 }
 
 }  // namespace walkvis

@@ -9,6 +9,7 @@
 // falls back to the per-polygon plane test.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -22,6 +23,10 @@ namespace walkvis {
 enum class ListCullMethod : uint8_t { kNone, kPolygon, kMask, kCluster, kHierarchy, kRegion };
 std::string_view listCullMethodName(ListCullMethod method);
 ListCullMethod parseListCullMethod(std::string_view name);  // SceneError naming the choices otherwise
+
+// Spare entries cullRange / cullRanges may write past the survivors (vector stores) before
+// shrinking `out`: reserve them to keep the per-frame call free of allocation.
+inline constexpr size_t kListCullOutSlack = 8;
 
 struct IndexRange {
   uint32_t first = 0;  // into the index array given to build()
@@ -47,13 +52,28 @@ class ListCuller {
 
   // Appends the polygons of range `range` that survive culling for `view`, in the range's order,
   // to `out`; returns how many were culled. Never culls a polygon front-facing at view.eye. No
-  // allocation once `out` has the capacity (capacity for out.size() + the range's count).
-  // Not thread-safe for kCluster and kHierarchy (a scratch buffer of unit flags; tracking state):
-  // one ListCuller per thread there. kRegion runs the plane test of kPolygon (a caller that knows
-  // its lists hold only front faces, drop_back_faces, need not call cullRange at all).
-  // Throws SceneError for a range index out of range.
+  // allocation once `out` has the capacity (capacity for out.size() + the range's count +
+  // kListCullOutSlack). Not thread-safe for kCluster and kHierarchy (a scratch buffer of unit
+  // flags; tracking state): one ListCuller per thread there. kRegion runs the plane test of
+  // kPolygon (a caller that knows its lists hold only front faces, drop_back_faces, need not call
+  // cullRange at all). Throws SceneError for a range index out of range (out unchanged then).
+  // Same as cullRanges of the one range.
   uint32_t cullRange(uint32_t range, const BackfaceView& view, std::vector<uint32_t>& out) const;
 
+  // cullRange of every range of `ranges`, in that order (ids may repeat; empty ranges add
+  // nothing): appends the concatenation of their survivors to `out` and returns the number culled,
+  // exactly as the calls one by one would. Made for all the runs of one query: the method is
+  // picked once per call and the runs go through one loop (polygon, region and mask's plane-test
+  // ranges: each distinct plane tested once per call, AVX-512 or AVX2 where the CPU has it, the same double
+  // operations as isFrontFacing(), so the same result bit for bit). No allocation once `out` has
+  // capacity for out.size() + the ranges' counts + kListCullOutSlack (`out` is resized once to
+  // that size and shrunk to what survives). Throws SceneError, with `out` unchanged, if an id is
+  // out of range.
+  uint32_t cullRanges(std::span<const uint32_t> ranges, const BackfaceView& view, std::vector<uint32_t>& out) const;
+
+  // mask: the positions (over all ranges) in chunks culled by a Zhang & Hoff table; the others
+  // get the plane test (chunks under mask_list_min_chunk positions). 0 for the other methods.
+  uint64_t maskTablePositions() const;
   ListCullMethod method() const;
   size_t rangeCount() const;
   uint64_t bytes() const;  // per-frame test state of all ranges

@@ -184,12 +184,12 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
             if (cell < world.run_cullers[*level].size()) culler = &world.run_cullers[*level][cell];
           }
           const BackfaceView view = backfaceView(camera, eye);
-          for (uint32_t r : run_indices_) {
-            const PfdRun& run = tree->runs[r];
-            stats.listed += run.count;
-            if (culler) {
-              stats.culled += culler->cullRange(r, view, draw);
-            } else {
+          for (uint32_t r : run_indices_) stats.listed += tree->runs[r].count;
+          if (culler) {
+            stats.culled += culler->cullRanges(run_indices_, view, draw);  // all runs in one call
+          } else {
+            for (uint32_t r : run_indices_) {
+              const PfdRun& run = tree->runs[r];
               draw.insert(draw.end(), tree->fragment_ids.begin() + run.first,
                           tree->fragment_ids.begin() + run.first + run.count);
             }

@@ -23,11 +23,12 @@
 // PFD trees with drop_back_faces = false; every run of every tree is a range of a ListCuller
 // (backface/list_cull.h) per method none/polygon/mask/mask-groups/cluster/hierarchy/region, and
 // meshoptimizer cones built per run; random eyes on the height plane; per eye the runs of its query
-// are culled in order (timed: cullRange with the order written out; cone: cull, expansion and
-// order). Figures are per listed polygon; over_none is ns/poly minus none's (the same walk writing the runs out
-// unculled), the cost the culling adds. mask is Zhang & Hoff's table on chunks of at least
-// mask_list_min_chunk positions and the plane test on smaller ones (nearly every PFD run);
-// mask-tables builds a table for every run. Then the BSP path: every fragment of the level's BSP
+// are culled in order (timed: one cullRanges call over the query's run ids with the order written
+// out, as a frame does; none too; cone: cull, expansion and order). Figures are per listed
+// polygon; over_none is ns/poly minus none's (the same call writing the runs out unculled), the
+// cost the culling adds. mask is Zhang & Hoff's table on chunks of at least mask_list_min_chunk
+// positions and the plane test on smaller ones (nearly every PFD run; a line under each mask row
+// says what share of the pool a table culls); mask-tables builds a table for every run. Then the BSP path: every fragment of the level's BSP
 // with eyes anywhere in the scene's box, the same table as for meshes, its cluster rows clustered
 // for eyes in that box and cluster-paper with the paper's near field around each cluster.
 // Any scene with floor levels works for --lists (e.g. gen:office: eyes inside a building). Each table ends with the issue's
@@ -387,7 +388,7 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
   uint64_t rng_state = args.seed;
   std::mt19937_64 rng(args.seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  uint64_t listed = 0, back_total = 0;
+  uint64_t listed = 0, back_total = 0, max_listed = 0;
   for (int e = 0; e < args.eyes; ++e) {
     const std::optional<glm::dvec3> at = samplePfdLevel(trees, rng_state);
     if (!at) break;  // the level has no region area
@@ -401,6 +402,9 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
     eye.view.view_dir = glm::dvec3(std::cos(yaw), 0.0, std::sin(yaw));
     eye.view.fov = M_PI / 3.0;
     pfdQueryRunIds(tree, eye.view.eye, eye.ranges);
+    uint64_t eye_listed = 0;
+    for (uint32_t r : eye.ranges) eye_listed += tree.runs[r].count;
+    max_listed = std::max(max_listed, eye_listed);
     for (uint32_t r : eye.ranges) {
       const PfdRun& run = tree.runs[r];
       listed += run.count;
@@ -455,7 +459,7 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
 
   nlohmann::ordered_json methods = nlohmann::ordered_json::array();
   std::vector<uint32_t> order;
-  order.reserve(pool);
+  order.reserve(max_listed + kListCullOutSlack);  // cullRanges allocates nothing then
   double none_ns = NAN;  // none's ns per polygon (first row), for over_none
   for (const ListRow& row : rows) {
     if (!rowSelected(args, row.label) && row.label != "none") continue;
@@ -494,17 +498,17 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
       }
     }
     const double build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    uint64_t table_positions = 0;  // mask: positions a Zhang & Hoff table culls (the rest: plane test)
+    for (const ListCuller& c : cullers) table_positions += c.maskTablePositions();
     std::vector<uint8_t> unit_flags(max_units), poly_flags(max_count);
     // Culls one eye's lists into `order`; returns the number culled.
     auto cullEye = [&](const Eye& eye) {
       order.clear();
       uint64_t culled = 0;
       const PfdTree& tree = trees.cells[eye.tree];
+      // What a frame does (walkthrough/frame.cpp): one cullRanges call over the query's runs.
+      if (!row.cone) return static_cast<uint64_t>(cullers[eye.tree].cullRanges(eye.ranges, eye.view, order));
       for (uint32_t r : eye.ranges) {
-        if (!row.cone) {
-          culled += cullers[eye.tree].cullRange(r, eye.view, order);
-          continue;
-        }
         const BackfaceCuller& c = *cones[eye.tree][r];
         const IndexRange& range = ranges[eye.tree][r];
         c.cull(eye.view, std::span<uint8_t>(unit_flags.data(), c.unitCount()));
@@ -570,11 +574,17 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
                        {"false_culls", false_culls},
                        {"false_culls_zero_area", false_invisible},
                        {"build_seconds", build_seconds}});
+    const double table_share = static_cast<double>(table_positions) / static_cast<double>(std::max<uint64_t>(pool, 1));
+    if (row.method == ListCullMethod::kMask && !row.cone) methods.back()["table_positions_ratio"] = table_share;
     if (!args.json) {
       std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %9.3f %7llu %9.3f\n", row.label.c_str(), 100.0 * culled_ratio,
                   100.0 * effectiveness, medianOf(ns), bytes_per_polygon, medianOf(ns) - none_ns,
                   static_cast<unsigned long long>(false_culls), build_seconds);
       if (row.cone && false_invisible > 0) printZeroAreaNote(false_invisible);
+      if (row.method == ListCullMethod::kMask && !row.cone) {
+        std::printf("    %s: %.1f%% of the pool in chunks culled by a Zhang & Hoff table, the rest by the plane test\n",
+                    row.label.c_str(), 100.0 * table_share);
+      }
     }
   }
   lists["methods"] = methods;

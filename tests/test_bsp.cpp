@@ -579,6 +579,63 @@ TEST(Bsp, PilotNeverWorseThanGreedy) {
               static_cast<unsigned long long>(greedy_total));
 }
 
+// Doom-like sloped walls: chains of collinear wall segments with integer ends (direction (3, 1),
+// (2, 5), ...; each segment its own polygon and heights) and a floor and a ceiling triangle on each
+// segment. Each polygon's plane is rounded on its own, so the other segments' ends and the
+// triangles' corners lie a hair off it: the exact build splits a sliver off each of them that is
+// still in the node's set when that plane is taken, unless the heuristic saw it coming.
+Scene slopedWallScene(uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  Scene scene;
+  scene.name = "sloped" + std::to_string(seed);
+  const int dirs[][2] = {{3, 1}, {2, 5}, {4, 3}, {1, 3}, {5, 2}, {3, -2}};
+  for (int chain = 0; chain < 10; ++chain) {
+    const int* dir = dirs[rng() % 6];
+    glm::dvec3 p{static_cast<double>(rng() % 40), 0, static_cast<double>(rng() % 40)};
+    const int segments = 2 + static_cast<int>(rng() % 3);
+    for (int k = 0; k < segments; ++k) {
+      const double len = 1.0 + static_cast<double>(rng() % 2);
+      const glm::dvec3 q = p + len * glm::dvec3(dir[0], 0, dir[1]);
+      const double lo = static_cast<double>(rng() % 2), hi = 2.0 + static_cast<double>(rng() % 2);
+      std::vector<glm::dvec3> quad = {{p.x, lo, p.z}, {q.x, lo, q.z}, {q.x, hi, q.z}, {p.x, hi, p.z}};
+      if (rng() % 2) std::reverse(quad.begin(), quad.end());
+      addFace(scene, quad, kColor, "test");
+      // A triangle on the segment's left side, its apex on the integer grid.
+      const glm::dvec3 apex = 0.5 * (p + q) + glm::dvec3(-dir[1], 0, dir[0]);
+      const glm::dvec3 r{std::round(apex.x), 0, std::round(apex.z)};
+      addFace(scene, std::vector<glm::dvec3>{{p.x, lo, p.z}, {r.x, lo, r.z}, {q.x, lo, q.z}}, kColor, "test");
+      addFace(scene, std::vector<glm::dvec3>{{p.x, hi, p.z}, {q.x, hi, q.z}, {r.x, hi, r.z}}, kColor, "test");
+      p = q;
+    }
+  }
+  return scene;
+}
+
+TEST(Bsp, ExactHeuristicSidesAvoidSlivers) {
+  uint64_t exact_total = 0, tolerant_total = 0;
+  for (uint64_t seed : {1, 2, 3, 4}) {
+    const Scene scene = slopedWallScene(seed);
+    BspOptions exact_sides;
+    BspOptions tolerant = exact_sides;
+    tolerant.exact_heuristic_sides = false;
+    const BspTree e = buildBsp(scene, exact_sides), e2 = buildBsp(scene, exact_sides), t = buildBsp(scene, tolerant);
+    std::printf("sloped walls %llu (n %zu): exact sides N/n %.3f, tolerant %.3f\n", static_cast<unsigned long long>(seed),
+                scene.polygons.size(), e.stats.ratio, t.stats.ratio);
+    EXPECT_EQ(e.fragments.size(), e2.fragments.size()) << "seed " << seed << ": not deterministic";
+    for (size_t i = 0; i < std::min(e.nodes.size(), e2.nodes.size()); ++i)
+      ASSERT_EQ(e.nodes[i].polygon, e2.nodes[i].polygon) << "seed " << seed << ": not deterministic";
+    std::vector<uint32_t> order;
+    backToFront(e, glm::dvec3(10.5, 1.5, 9.5), order);
+    expectPermutation(order, e.fragments.size());
+    EXPECT_LE(e.fragments.size(), t.fragments.size()) << "seed " << seed;
+    exact_total += e.fragments.size();
+    tolerant_total += t.fragments.size();
+  }
+  std::printf("exact sides %llu fragments, tolerant %llu\n", static_cast<unsigned long long>(exact_total),
+              static_cast<unsigned long long>(tolerant_total));
+  EXPECT_LT(exact_total, tolerant_total);
+}
+
 TEST(Bsp, EmptySceneAndBadPlanes) {
   Scene empty;
   const BspTree tree = buildBsp(empty);

@@ -68,6 +68,10 @@ struct PfdOptions {
   // clips one tree may spend on it (then the greedy choice), so big trees pay a bounded amount.
   uint32_t search_lines = 8;
   uint64_t search_work = 200'000;
+  // Clip off W the slivers (narrower than 1e-9 of the region's extent) that BSP lines cut from it
+  // only because plane coefficients are rounded (pfd_build_cgal.cpp, trimSlivers): each would be
+  // a test for a leaf of no area. Eyes that close to a wall's plane leave the region.
+  bool trim_slivers = true;
   bool dedup = true;         // store each distinct emitted run once (false: one run per emission)
   // PFD with dedup: a resolved subtree's order of at least this many ids is stored as a sequence
   // referring to its children's orders; shorter ones flat. Smaller: less memory, more (shorter)

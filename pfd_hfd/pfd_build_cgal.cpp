@@ -1306,6 +1306,50 @@ Region makeRegion(std::span<const std::vector<glm::dvec2>> walkable, const std::
   return region;
 }
 
+// Trims off W the slivers that BSP lines cut from it. A wall's line should pass through the
+// corners of W it was made from, but the plane's coefficients are rounded doubles, so a diagonal
+// wall's line passes a hair beside them and exactly crosses W in a sliver of no visible width.
+// Every such line would then be tested (at the cost of every eye of the region it is tested in)
+// for a leaf of no area. A piece that a line leaves less than `tol` on one side of is clipped to
+// the other side, exactly (so the line then touches it); eyes closer than tol to a wall's plane
+// leave W. tol = 1e-9 × the region's extent: far above the rounding (a few ulps of the
+// coordinates, ~1e-16 relative) and far below any distance an eye keeps from a wall.
+void trimSlivers(Region& region, const BspTree& bsp, double height, Counters& counters, uint64_t& trimmed) {
+  double extent = 1.0;
+  for (const Piece& p : region) {
+    extent = std::max({extent, std::abs(p.lox), std::abs(p.hix), std::abs(p.loz), std::abs(p.hiz)});
+  }
+  const double tol = 1e-9 * extent;
+  Region one, front, back;
+  for (const BspNode& node : bsp.nodes) {
+    const Line l = planeLine(node.plane, height);
+    if (l.constant) continue;
+    const double reach = tol * std::hypot(l.a, l.b);  // tol in units of the line's value
+    for (size_t i = 0; i < region.size(); ++i) {
+      const Piece& p = region[i];
+      const double xmin = l.a > 0 ? p.lox : p.hix, xmax = l.a > 0 ? p.hix : p.lox;
+      const double zmin = l.b > 0 ? p.loz : p.hiz, zmax = l.b > 0 ? p.hiz : p.loz;
+      if (l.a * xmin + l.b * zmin + l.c > reach || l.a * xmax + l.b * zmax + l.c < -reach) continue;
+      double hi = 0.0, lo = 0.0;
+      for (const Corner& k : p.corners) {
+        const double v = l.a * k.ax + l.b * k.az + l.c;
+        hi = std::max(hi, v);
+        lo = std::min(lo, v);
+      }
+      const bool front_sliver = hi > 0.0 && hi < reach, back_sliver = lo < 0.0 && -lo < reach;
+      if (front_sliver == back_sliver) continue;  // no crossing, a real one, or all of it a sliver
+      one.assign(1, p);
+      front.clear();
+      back.clear();
+      clipRegion(one, l, counters, &front, &back);
+      Region& keep = front_sliver ? back : front;
+      if (keep.size() != 1) continue;  // exactly no crossing after all (or nothing left): leave it
+      region[i] = std::move(keep[0]);
+      ++trimmed;
+    }
+  }
+}
+
 }  // namespace
 
 const char* treeKindName(TreeKind kind) {
@@ -1341,6 +1385,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
 
   Counters counters;
   Region region = makeRegion(walkable, cell, counters);
+  uint64_t trimmed = 0;
+  if (options.trim_slivers) trimSlivers(region, bsp, height, counters, trimmed);
   for (const Piece& p : region) {
     std::vector<glm::dvec2> ring;
     for (const Corner& k : p.corners) ring.emplace_back(k.ax, k.az);

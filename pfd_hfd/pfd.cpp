@@ -67,14 +67,17 @@ double triangleArea(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& 
 
 }  // namespace
 
-PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order) {
-  order.clear();
+namespace {
+
+// The root-to-leaf walk every query makes: visit(node) for each node on the eye's path, root first.
+template <typename Visit>
+PfdQueryResult walkPath(const PfdTree& tree, const glm::dvec3& eye, Visit&& visit) {
   PfdQueryResult result;
   if (tree.nodes.empty()) return result;
   uint32_t i = 0;
   for (;;) {
     const PfdNode& node = tree.nodes[i];
-    appendList(tree, node, order);
+    visit(node);
     if (node.front < 0) break;
     const int s = planeSide(tree.planes[node.plane], eye);
     ++result.tests;
@@ -84,27 +87,20 @@ PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<
   return result;
 }
 
-namespace {
-
-// The root-to-leaf walk shared by the run queries: emit(run index) for each node's list in order.
+// The walk of the run queries: emit(run index) for each node's list in order.
 template <typename Emit>
 PfdQueryResult walkRuns(const PfdTree& tree, const glm::dvec3& eye, Emit&& emit) {
-  PfdQueryResult result;
-  if (tree.nodes.empty()) return result;
-  uint32_t i = 0;
-  for (;;) {
-    const PfdNode& node = tree.nodes[i];
+  return walkPath(tree, eye, [&](const PfdNode& node) {
     for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) forEachRun(tree, tree.run_refs[r], emit);
-    if (node.front < 0) break;
-    const int s = planeSide(tree.planes[node.plane], eye);
-    ++result.tests;
-    result.on_line |= s == 0;
-    i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
-  }
-  return result;
+  });
 }
 
 }  // namespace
+
+PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order) {
+  order.clear();
+  return walkPath(tree, eye, [&](const PfdNode& node) { appendList(tree, node, order); });
+}
 
 PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs) {
   runs.clear();
@@ -118,19 +114,9 @@ PfdQueryResult pfdQueryRunIds(const PfdTree& tree, const glm::dvec3& eye, std::v
 
 PfdQueryResult pfdQueryRefs(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRefRange>& lists) {
   lists.clear();
-  PfdQueryResult result;
-  if (tree.nodes.empty()) return result;
-  uint32_t i = 0;
-  for (;;) {
-    const PfdNode& node = tree.nodes[i];
+  return walkPath(tree, eye, [&](const PfdNode& node) {
     if (node.ref_count > 0) lists.push_back({node.first_ref, node.ref_count});
-    if (node.front < 0) break;
-    const int s = planeSide(tree.planes[node.plane], eye);
-    ++result.tests;
-    result.on_line |= s == 0;
-    i = static_cast<uint32_t>(s > 0 ? node.front : node.back);
-  }
-  return result;
+  });
 }
 
 void pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, std::vector<uint32_t>& run_ids) {

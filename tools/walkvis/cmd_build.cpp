@@ -102,36 +102,21 @@ QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) 
   }
   std::vector<uint32_t> order;
   order.reserve(bsp.fragments.size());
-  uint64_t sink = 0;
-  auto t0 = std::chrono::steady_clock::now();
-  for (const glm::dvec3& e : points) sink += pfdQuery(tree, e, order).tests + order.size();
-  auto t1 = std::chrono::steady_clock::now();
-  for (const glm::dvec3& e : points) {
-    backToFront(bsp, e, order, true);
-    sink += order.size();
-  }
-  auto t2 = std::chrono::steady_clock::now();
   std::vector<PfdRun> runs;
-  uint64_t run_count = 0;
-  for (const glm::dvec3& e : points) {
-    sink += pfdQueryRuns(tree, e, runs).tests;
-    run_count += runs.size();
-  }
-  auto t3 = std::chrono::steady_clock::now();
   std::vector<PfdRefRange> lists;
-  uint64_t list_count = 0;
-  for (const glm::dvec3& e : points) {
-    sink += pfdQueryRefs(tree, e, lists).tests;
-    list_count += lists.size();
-  }
-  auto t4 = std::chrono::steady_clock::now();
-  t.refs_ns = std::chrono::duration<double, std::nano>(t4 - t3).count() / eyes;
-  t.refs_mean = static_cast<double>(list_count) / eyes;
-  t.runs_ns = std::chrono::duration<double, std::nano>(t3 - t2).count() / eyes;
-  t.runs_mean = static_cast<double>(run_count) / eyes;
-  t.pfd_ns = std::chrono::duration<double, std::nano>(t1 - t0).count() / eyes;
-  t.bsp_ns = std::chrono::duration<double, std::nano>(t2 - t1).count() / eyes;
-  if (sink == 42) std::fprintf(stderr, " ");  // keeps the loops from being optimised away
+  // Mean ns per eye of query(eye), and the mean of what it returns (the size of its output).
+  auto timeEach = [&](auto&& query, double& ns, double& mean) {
+    uint64_t total = 0;
+    const auto start = std::chrono::steady_clock::now();
+    for (const glm::dvec3& e : points) total += query(e);
+    ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / eyes;
+    mean = static_cast<double>(total) / eyes;
+  };
+  double ids_mean = 0.0;
+  timeEach([&](const glm::dvec3& e) { pfdQuery(tree, e, order); return order.size(); }, t.pfd_ns, ids_mean);
+  timeEach([&](const glm::dvec3& e) { backToFront(bsp, e, order, true); return order.size(); }, t.bsp_ns, ids_mean);
+  timeEach([&](const glm::dvec3& e) { pfdQueryRuns(tree, e, runs); return runs.size(); }, t.runs_ns, t.runs_mean);
+  timeEach([&](const glm::dvec3& e) { pfdQueryRefs(tree, e, lists); return lists.size(); }, t.refs_ns, t.refs_mean);
   return t;
 }
 

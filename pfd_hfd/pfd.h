@@ -124,6 +124,13 @@ struct PfdStats {
   // entropy bound and the entropy bound + 1: on a tree with a few leaves of very unequal area
   // (entropy below ~3 bits) no tree can reach 1.3 × the entropy, but it can reach this.
   double tests_huffman_bound = 0.0;
+  // Another lower bound on mean tests, from the geometry: a leaf is reached only after testing
+  // every line that bounds it (it would straddle an untested one), so Σ over leaves of the area
+  // fraction × the tested lines on the leaf's boundary. Where a big leaf is bounded by several
+  // lines (slivers and thin cells beside it), this exceeds 1.3 × the entropy and no order of the
+  // tests can meet that target. Without HFD the leaves are the same for every order. Computed by
+  // the build; not stored in the tree file (0 after loading).
+  double tests_cell_bound = 0.0;
   double region_area = 0.0;
   uint64_t visibility_tests = 0;   // HFD: fragment-versus-region queries
   uint64_t visibility_rays = 0;    // HFD: occlusion rays cast

@@ -168,6 +168,9 @@ int cornerSign(const Line& l, const Corner& k, Counters& counters) {
 
 constexpr int kCross = 2;
 
+// Slivers narrower than this × the region's extent are trimmed off regions (trimSlivers).
+constexpr double kSliverTolerance = 1e-9;
+
 // +1: the region lies in the line's positive side (corners >= 0, some > 0); -1: negative side;
 // 0: the line is constant zero (a horizontal plane through the height plane); kCross: corners
 // strictly on both sides.
@@ -394,6 +397,10 @@ class Builder {
       if (canon == id) bucket.push_back(id);
       lines_[id].canon = canon;
     }
+    double extent = 1.0;
+    for (const Piece& p : root)
+      extent = std::max({extent, std::abs(p.lox), std::abs(p.hix), std::abs(p.loz), std::abs(p.hiz)});
+    sliver_tol_ = kSliverTolerance * extent;
     side_.assign(lines_.size(), kUnknown);
     cross_stamp_.assign(lines_.size(), 0);
     unresolved_stamp_.assign(nn, 0);
@@ -451,6 +458,8 @@ class Builder {
   uint64_t hidden_rejected = 0;
   uint64_t varying_count = 0;
   std::vector<double> leaf_areas;
+  uint64_t slivers_trimmed = 0;  // trimSliver calls that clipped a region
+  double leaf_bound_tests = 0.0;  // Σ over leaves of area × tested lines bounding the leaf
   uint64_t depth_max = 0;
   uint64_t list_fragments = 0;
 
@@ -1124,8 +1133,41 @@ class Builder {
     return best;
   }
 
+  // A line that crosses r only in a sliver (see trimSlivers: narrower than sliver_tol_, the
+  // rounding of plane coefficients) trims r to its other side, exactly, instead of being tested:
+  // the lists emitted so far hold for any part of r, and the line then only touches r. Where two
+  // walls' lines nearly coincide, the slivers appear only once one of them bounds the region, so
+  // this is done at every node, not only on W. Returns whether r changed.
+  bool trimSliver(Region& r, uint32_t id) {
+    if (!options_.trim_slivers) return false;
+    const Line& l = lines_[id];
+    if (l.constant) return false;
+    double hi = 0.0, lo = 0.0;
+    for (const Piece& p : r) {
+      for (const Corner& k : p.corners) {
+        const double v = l.a * k.ax + l.b * k.az + l.c;
+        hi = std::max(hi, v);
+        lo = std::min(lo, v);
+      }
+    }
+    const double reach = sliver_tol_ * std::hypot(l.a, l.b);
+    const bool front_sliver = hi > 0.0 && hi < reach, back_sliver = lo < 0.0 && -lo < reach;
+    if (front_sliver == back_sliver) return false;
+    Region front, back;
+    clipRegion(r, l, counters, &front, &back);
+    Region& keep = front_sliver ? back : front;
+    if (keep.empty()) return false;
+    r = std::move(keep);
+    region_id_ = ++region_counter_;  // cached crossings and rings were of the untrimmed region
+    ++slivers_trimmed;
+    return true;
+  }
+
+  std::vector<uint32_t> path_lines_;  // canonical ids of the lines tested on the way to this node
   bool cands_complete_ = false;  // the last candidates() call found every line still to be tested
   uint64_t search_work_ = 0;      // clips made by searchLine in this tree
+  double sliver_tol_ = 0.0;       // kSliverTolerance × the root region's extent
+  static constexpr uint32_t kMaxTrimsPerNode = 64;  // a guard: each trim removes a line's crossing
 
   uint32_t testPlaneIndex(uint32_t line) {
     if (test_plane_[line] == UINT32_MAX) {
@@ -1143,6 +1185,7 @@ class Builder {
     depth_max = std::max(depth_max, depth);
     const uint32_t first_ref = static_cast<uint32_t>(out_.run_refs.size());
     uint32_t crossing = UINT32_MAX;
+    uint32_t trims = 0;
     while (!stack.empty()) {
       const Item item = stack.back();
       const BspNode& node = bsp_.nodes[item.node];
@@ -1154,6 +1197,10 @@ class Builder {
           if (hfd() && allHidden(std::span<const uint32_t>(frag_pre_.data() + fb, fe - fb), r)) {
             stack.pop_back();
             continue;
+          }
+          if (trims < kMaxTrimsPerNode && trimSliver(r, static_cast<uint32_t>(item.node))) {
+            ++trims;
+            continue;  // the same item again, in the trimmed region
           }
           crossing = static_cast<uint32_t>(item.node);
           break;
@@ -1183,6 +1230,10 @@ class Builder {
             stack.pop_back();
             continue;
           }
+          if (trims < kMaxTrimsPerNode && trimSliver(r, fl)) {
+            ++trims;
+            continue;
+          }
           crossing = fl;
           break;
         }
@@ -1199,6 +1250,20 @@ class Builder {
       double area = 0.0;
       for (const Piece& p : r) area += pieceArea(p);
       leaf_areas.push_back(area);
+      // Every tested line that bounds the leaf was tested on its path: a lower bound of its depth
+      // that no order of the tests can beat (PfdStats::tests_cell_bound).
+      uint32_t bounding = 0;
+      for (size_t k = 0; k < path_lines_.size(); ++k) {
+        const uint32_t canon = path_lines_[k];
+        if (std::find(path_lines_.begin(), path_lines_.begin() + static_cast<std::ptrdiff_t>(k), canon) !=
+            path_lines_.begin() + static_cast<std::ptrdiff_t>(k))
+          continue;  // counted already
+        bool on_edge = false;
+        for (const Piece& p : r)
+          on_edge |= std::find(p.edge_line.begin(), p.edge_line.end(), canon) != p.edge_line.end();
+        bounding += on_edge;
+      }
+      leaf_bound_tests += area * bounding;
       return index;
     }
     const uint32_t line = chooseLine(crossing, stack, r);
@@ -1209,12 +1274,14 @@ class Builder {
     const size_t mark = log_.size(), hidden_mark = hidden_log_.size();
     side_[line] = 1;
     log_.push_back(line);
+    path_lines_.push_back(lines_[line].canon);
     const int32_t f = build(std::move(front), stack, depth + 1);
     undo(mark, hidden_mark);
     side_[line] = -1;
     log_.push_back(line);
     const int32_t b = build(std::move(back), std::move(stack), depth + 1);
     undo(mark, hidden_mark);
+    path_lines_.pop_back();
     out_.nodes[index].plane = testPlaneIndex(line);
     out_.nodes[index].front = f;
     out_.nodes[index].back = b;
@@ -1319,7 +1386,7 @@ void trimSlivers(Region& region, const BspTree& bsp, double height, Counters& co
   for (const Piece& p : region) {
     extent = std::max({extent, std::abs(p.lox), std::abs(p.hix), std::abs(p.loz), std::abs(p.hiz)});
   }
-  const double tol = 1e-9 * extent;
+  const double tol = kSliverTolerance * extent;
   Region one, front, back;
   for (const BspNode& node : bsp.nodes) {
     const Line l = planeLine(node.plane, height);
@@ -1425,6 +1492,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   }
   s.tests_entropy_bound = entropy;
   s.tests_huffman_bound = huffmanMeanDepth(builder.leaf_areas);
+  s.tests_cell_bound = s.region_area > 0.0 ? builder.leaf_bound_tests / s.region_area : 0.0;
   tree.nodes.shrink_to_fit();
   tree.run_refs.shrink_to_fit();
   tree.runs.shrink_to_fit();

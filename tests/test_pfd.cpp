@@ -159,6 +159,8 @@ void checkStructure(const BspTree& bsp, const PfdTree& tree) {
   EXPECT_GE(tree.stats.tests_huffman_bound, tree.stats.tests_entropy_bound - 1e-9);
   EXPECT_LE(tree.stats.tests_huffman_bound, tree.stats.tests_entropy_bound + 1.0 + 1e-9);
   EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_huffman_bound);
+  // Every leaf lies below the tests of the lines that bound it (sampling noise aside).
+  EXPECT_GE(tree.stats.tests_mean, 0.95 * tree.stats.tests_cell_bound);
   EXPECT_LE(tree.stats.pool_entries, tree.stats.list_fragments);
   EXPECT_GT(tree.stats.bytes, 0u);
 }

@@ -229,6 +229,7 @@ int runBuild(const BuildArgs& args) {
       e["tests_max"] = s.tests_max;
       e["tests_entropy_bound"] = s.tests_entropy_bound;
       e["tests_huffman_bound"] = s.tests_huffman_bound;
+      e["tests_cell_bound"] = s.tests_cell_bound;
       e["nodes"] = s.nodes;
       e["list_entries"] = s.list_entries;
       e["list_fragments"] = s.list_fragments;

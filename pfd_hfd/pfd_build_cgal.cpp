@@ -1046,13 +1046,14 @@ class Builder {
     const std::vector<uint32_t>* lines = nullptr;  // the candidate lines, by position
     std::unordered_map<uint32_t, double> memo;     // decision code -> least Σ area × tests below
     uint64_t work = 0;                             // clips made
+    uint64_t limit = 0;                            // the search is given up beyond this many
   };
 
   // The least Σ over leaves of area × tests for the region r (area `area`), whose still-crossing
   // candidates are the set bits of `mask`; `code` holds 2 bits per candidate position (1 front,
   // 2 back) of the tests on the way here. *choice: the position to test first (if wanted).
   double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, SearchState& st, int* choice) {
-    if (mask == 0) return 0.0;
+    if (mask == 0 || st.work > st.limit) return 0.0;  // over the budget: the caller drops the result
     if (!choice) {
       if (auto it = st.memo.find(code); it != st.memo.end()) return it->second;
     }
@@ -1102,12 +1103,17 @@ class Builder {
     const DRegion dr = rings(r);
     SearchState st;
     st.lines = &lines;
+    st.limit = options_.search_work - search_work_;
     uint32_t mask = 0;
     for (size_t i = 0; i < lines.size(); ++i)
       if (crossesD(dr, lines_[lines[i]])) mask |= 1u << i;
     int choice = -1;
     searchTests(dr, areaD(dr), mask, 0, st, &choice);
     search_work_ += st.work;
+    if (st.work > st.limit) {  // given up: the budget is spent, the greedy choice from here on
+      search_work_ = options_.search_work;
+      return UINT32_MAX;
+    }
     return choice < 0 ? UINT32_MAX : lines[static_cast<size_t>(choice)];
   }
 

@@ -97,21 +97,32 @@ void verify(const BackfaceInput& input, std::span<const uint32_t> range, const s
   }
 }
 
+// The polygons 0..n-1 in random order plus n / repeat_div repeats, cut into consecutive ranges of
+// 0..count_mod-1 positions.
+struct RandomLists {
+  std::vector<uint32_t> indices;
+  std::vector<IndexRange> ranges;
+};
+RandomLists randomLists(size_t n, uint32_t repeat_div, uint32_t count_mod, std::mt19937_64& rng) {
+  RandomLists r;
+  r.indices.resize(n);
+  for (uint32_t i = 0; i < n; ++i) r.indices[i] = i;
+  std::shuffle(r.indices.begin(), r.indices.end(), rng);
+  for (uint32_t i = 0; i < n / repeat_div; ++i) r.indices.push_back(r.indices[rng() % n]);
+  for (uint32_t at = 0; at < r.indices.size();) {
+    const uint32_t count = std::min<uint32_t>(static_cast<uint32_t>(rng() % count_mod), static_cast<uint32_t>(r.indices.size()) - at);
+    r.ranges.push_back({at, count});
+    at += count;
+  }
+  return r;
+}
+
 // Random order of the polygons (some repeated), cut into ranges of 0..3·mean polygons, plus the
 // whole array and one range overlapping two others. Per eye a few random ranges are culled.
 void expectNoFrontFaceCulled(const Scene& s, uint64_t seed, uint32_t mean) {
   const BackfaceInput input = backfaceInput(s);
   std::mt19937_64 rng(seed);
-  std::vector<uint32_t> indices(s.polygons.size());
-  for (uint32_t i = 0; i < indices.size(); ++i) indices[i] = i;
-  std::shuffle(indices.begin(), indices.end(), rng);
-  for (uint32_t i = 0; i < indices.size() / 10; ++i) indices.push_back(indices[rng() % s.polygons.size()]);
-  std::vector<IndexRange> ranges;
-  for (uint32_t at = 0; at < indices.size();) {
-    const uint32_t count = std::min<uint32_t>(static_cast<uint32_t>(rng() % (3 * mean + 1)), static_cast<uint32_t>(indices.size()) - at);
-    ranges.push_back({at, count});
-    at += count;
-  }
+  auto [indices, ranges] = randomLists(s.polygons.size(), 10, 3 * mean + 1, rng);
   ranges.push_back({0, static_cast<uint32_t>(indices.size())});
   ranges.push_back({static_cast<uint32_t>(indices.size() / 3), static_cast<uint32_t>(indices.size() / 3)});
   const Frame f = frameOf(s);
@@ -337,16 +348,7 @@ void expectBatchEqualsSingles(const Scene& s, uint64_t seed) {
   SCOPED_TRACE(s.name);
   const BackfaceInput input = backfaceInput(s);
   std::mt19937_64 rng(seed);
-  std::vector<uint32_t> indices(s.polygons.size());
-  for (uint32_t i = 0; i < indices.size(); ++i) indices[i] = i;
-  std::shuffle(indices.begin(), indices.end(), rng);
-  for (uint32_t i = 0; i < indices.size() / 4; ++i) indices.push_back(indices[rng() % s.polygons.size()]);
-  std::vector<IndexRange> ranges;
-  for (uint32_t at = 0; at < indices.size();) {
-    const uint32_t count = std::min<uint32_t>(static_cast<uint32_t>(rng() % 40), static_cast<uint32_t>(indices.size()) - at);
-    ranges.push_back({at, count});  // count 0 now and then: empty ranges
-    at += count;
-  }
+  auto [indices, ranges] = randomLists(s.polygons.size(), 4, 40, rng);  // count 0 now and then: empty ranges
   ranges.push_back({static_cast<uint32_t>(indices.size()), 0});
   const Frame f = frameOf(s);
   std::vector<CullSetup> setups = cullSetups();

@@ -168,6 +168,9 @@ int cornerSign(const Line& l, const Corner& k, Counters& counters) {
 
 constexpr int kCross = 2;
 
+// PfdOptions::search_lines is capped here: the search's memo has 4^lines entries.
+constexpr uint32_t kMaxSearchLines = 12;
+
 // Slivers narrower than this × the region's extent are trimmed off regions (trimSlivers).
 constexpr double kSliverTolerance = 1e-9;
 
@@ -986,30 +989,38 @@ class Builder {
   // double) must still be tested wherever it crosses, at the cost of every eye of the region it is
   // tested in, and the search must see that to put it low in the tree; a touching line that
   // rounding shows as crossing only makes the estimate pessimistic.
-  using DRegion = std::vector<std::vector<glm::dvec2>>;
+  // Convex pieces stored flat (piece k: pts[start[k], start[k + 1])), so that clearing one keeps
+  // its memory: a search clips thousands of times and allocates nothing once warm.
+  struct DRegion {
+    std::vector<glm::dvec2> pts;
+    std::vector<uint32_t> start{0};
+    size_t pieces() const { return start.size() - 1; }
+    void clear() {
+      pts.clear();
+      start.assign(1, 0);
+    }
+  };
 
   static double lineValue(const Line& l, const glm::dvec2& p) { return l.a * p.x + l.b * p.y + l.c; }
 
   static bool crossesD(const DRegion& r, const Line& l) {
     bool pos = false, neg = false;
-    for (const auto& poly : r) {
-      for (const glm::dvec2& p : poly) {
-        const double v = lineValue(l, p);
-        pos |= v > 0.0;
-        neg |= v < 0.0;
-      }
-      if (pos && neg) return true;
+    for (const glm::dvec2& p : r.pts) {
+      const double v = lineValue(l, p);
+      pos |= v > 0.0;
+      neg |= v < 0.0;
     }
-    return false;
+    return pos && neg;
   }
 
   static double areaD(const DRegion& r) {
     double total = 0.0;
-    for (const auto& poly : r) {
+    for (size_t k = 0; k < r.pieces(); ++k) {
+      const uint32_t b = r.start[k], n = r.start[k + 1] - b;
       double a = 0.0;
-      for (size_t i = 0; i < poly.size(); ++i) {
-        const glm::dvec2& u = poly[i];
-        const glm::dvec2& v = poly[(i + 1) % poly.size()];
+      for (uint32_t i = 0; i < n; ++i) {
+        const glm::dvec2& u = r.pts[b + i];
+        const glm::dvec2& v = r.pts[b + (i + 1) % n];
         a += u.x * v.y - v.x * u.y;
       }
       total += 0.5 * std::abs(a);
@@ -1021,46 +1032,59 @@ class Builder {
   static void clipD(const DRegion& r, const Line& l, DRegion& front, DRegion& back) {
     front.clear();
     back.clear();
-    std::vector<glm::dvec2> f, b;
-    for (const auto& poly : r) {
-      f.clear();
-      b.clear();
-      for (size_t i = 0; i < poly.size(); ++i) {
-        const glm::dvec2& u = poly[i];
-        const glm::dvec2& v = poly[(i + 1) % poly.size()];
+    auto close = [](DRegion& d) {  // a piece of fewer than 3 corners has no area: dropped
+      if (d.pts.size() - d.start.back() >= 3) d.start.push_back(static_cast<uint32_t>(d.pts.size()));
+      else d.pts.resize(d.start.back());
+    };
+    for (size_t k = 0; k < r.pieces(); ++k) {
+      const uint32_t b = r.start[k], n = r.start[k + 1] - b;
+      for (uint32_t i = 0; i < n; ++i) {
+        const glm::dvec2& u = r.pts[b + i];
+        const glm::dvec2& v = r.pts[b + (i + 1) % n];
         const double fu = lineValue(l, u), fv = lineValue(l, v);
-        if (fu >= 0) f.push_back(u);
-        if (fu <= 0) b.push_back(u);
+        if (fu >= 0) front.pts.push_back(u);
+        if (fu <= 0) back.pts.push_back(u);
         if ((fu > 0 && fv < 0) || (fu < 0 && fv > 0)) {
           const glm::dvec2 x = u + (fu / (fu - fv)) * (v - u);
-          f.push_back(x);
-          b.push_back(x);
+          front.pts.push_back(x);
+          back.pts.push_back(x);
         }
       }
-      if (f.size() >= 3) front.push_back(f);
-      if (b.size() >= 3) back.push_back(b);
+      close(front);
+      close(back);
     }
   }
 
+  // Per tree, reused by every search: clip scratch per recursion depth and a memo over the decision
+  // codes (2 bits per line, < 4^search_lines), valid where its stamp is the current search's.
+  struct SearchScratch {
+    std::vector<std::pair<DRegion, DRegion>> depth;  // front, back at each depth
+    std::vector<double> memo;
+    std::vector<uint32_t> stamp;
+    uint32_t search = 0;
+  };
+  SearchScratch search_scratch_;
+
   struct SearchState {
     const std::vector<uint32_t>* lines = nullptr;  // the candidate lines, by position
-    std::unordered_map<uint32_t, double> memo;     // decision code -> least Σ area × tests below
     uint64_t work = 0;                             // clips made
     uint64_t limit = 0;                            // the search is given up beyond this many
   };
 
   // The least Σ over leaves of area × tests for the region r (area `area`), whose still-crossing
   // candidates are the set bits of `mask`; `code` holds 2 bits per candidate position (1 front,
-  // 2 back) of the tests on the way here. *choice: the position to test first (if wanted).
-  double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, SearchState& st, int* choice) {
+  // 2 back) of the tests on the way here, `level` how many. *choice: the position to test first
+  // (if wanted).
+  double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, uint32_t level, SearchState& st,
+                     int* choice) {
     if (mask == 0 || st.work > st.limit) return 0.0;  // over the budget: the caller drops the result
-    if (!choice) {
-      if (auto it = st.memo.find(code); it != st.memo.end()) return it->second;
-    }
+    SearchScratch& sc = search_scratch_;
+    if (!choice && sc.stamp[code] == sc.search) return sc.memo[code];
     const std::vector<uint32_t>& lines = *st.lines;
     double best = INFINITY;
     int best_i = -1;
-    DRegion front, back;
+    DRegion& front = sc.depth[level].first;
+    DRegion& back = sc.depth[level].second;
     for (uint32_t m = mask; m != 0; m &= m - 1) {
       const int i = std::countr_zero(m);
       const Line& l = lines_[lines[static_cast<size_t>(i)]];
@@ -1074,16 +1098,21 @@ class Builder {
         if (crossesD(front, lj)) fm |= 1u << j;
         if (crossesD(back, lj)) bm |= 1u << j;
       }
-      const double v = searchTests(front, af, fm, code | (1u << (2 * i)), st, nullptr) +
-                       searchTests(back, ab, bm, code | (2u << (2 * i)), st, nullptr);
+      // The front side's search reuses deeper scratch only, so `back` is intact for its own.
+      const double v = searchTests(front, af, fm, code | (1u << (2 * i)), level + 1, st, nullptr) +
+                       searchTests(back, ab, bm, code | (2u << (2 * i)), level + 1, st, nullptr);
       if (v < best) {
         best = v;
         best_i = i;
       }
     }
     const double result = best_i < 0 ? area : area + best;
-    if (choice) *choice = best_i;
-    else st.memo.emplace(code, result);
+    if (choice) {
+      *choice = best_i;
+    } else {
+      sc.memo[code] = result;
+      sc.stamp[code] = sc.search;
+    }
     return result;
   }
 
@@ -1097,10 +1126,25 @@ class Builder {
       bool dup = false;
       for (uint32_t o : lines) dup |= lines_[o].canon == lines_[id].canon;
       if (!dup) lines.push_back(id);
-      if (lines.size() > options_.search_lines) return UINT32_MAX;
+      if (lines.size() > options_.search_lines || lines.size() > kMaxSearchLines) return UINT32_MAX;
     }
     if (lines.size() < 2) return UINT32_MAX;
-    const DRegion dr = rings(r);
+    SearchScratch& sc = search_scratch_;
+    const size_t codes = size_t{1} << (2 * lines.size());
+    if (sc.memo.size() < codes) {
+      sc.memo.resize(codes);
+      sc.stamp.resize(codes, 0);
+    }
+    if (sc.depth.size() < lines.size() + 1) sc.depth.resize(lines.size() + 1);
+    if (++sc.search == 0) {  // the stamps wrapped: none may look current
+      std::fill(sc.stamp.begin(), sc.stamp.end(), 0);
+      sc.search = 1;
+    }
+    DRegion dr;
+    for (const auto& ring : rings(r)) {
+      dr.pts.insert(dr.pts.end(), ring.begin(), ring.end());
+      dr.start.push_back(static_cast<uint32_t>(dr.pts.size()));
+    }
     SearchState st;
     st.lines = &lines;
     st.limit = options_.search_work - search_work_;
@@ -1108,7 +1152,7 @@ class Builder {
     for (size_t i = 0; i < lines.size(); ++i)
       if (crossesD(dr, lines_[lines[i]])) mask |= 1u << i;
     int choice = -1;
-    searchTests(dr, areaD(dr), mask, 0, st, &choice);
+    searchTests(dr, areaD(dr), mask, 0, 0, st, &choice);
     search_work_ += st.work;
     if (st.work > st.limit) {  // given up: the budget is spent, the greedy choice from here on
       search_work_ = options_.search_work;

@@ -283,23 +283,41 @@ PlanePath resolvePlanePath(BackfaceSimd simd) {
   return PlanePath::kScalar;
 }
 
+using FrontTable = std::array<uint8_t, kMaxTablePlanes + 8>;  // + 8: the 8-plane steps write past a.planes
+
+// The plane bytes for a call listing `listed` positions, in `storage`; nullptr where the call
+// should test each position's plane directly instead (see planeTestRuns).
+const uint8_t* frontTableFor(PlanePath path, const PlaneArrays& a, uint64_t listed, const glm::dvec3& eye,
+                             FrontTable& storage) {
+  if (a.planes > kMaxTablePlanes || 4 * listed < a.planes) return nullptr;
+  switch (path) {
+#ifdef WALKVIS_LIST_CULL_X86
+    case PlanePath::kAvx512: frontTableAvx512(a, eye, storage.data()); break;
+    case PlanePath::kAvx2: frontTableAvx2(a, eye, storage.data()); break;
+#endif
+    default: frontTableScalar(a, eye, storage.data()); break;
+  }
+  return storage.data();
+}
+
+// Runs ids[0, n) by the plane bytes `front` (frontTableFor), or directly where it is nullptr.
+uint32_t* planeRuns(PlanePath path, const PlaneArrays& a, const uint8_t* front, const IndexRange* spans,
+                    const uint32_t* ids, size_t n, const glm::dvec3& eye, uint32_t* dst) {
+  if (!front) return directRuns(a, spans, ids, n, eye, dst);
+#ifdef WALKVIS_LIST_CULL_X86
+  if (path == PlanePath::kAvx512) return tableRunsAvx512(a, front, spans, ids, n, dst);
+#endif
+  (void)path;
+  return tableRuns(a, front, spans, ids, n, dst);
+}
+
 // The plane test of runs ids[0, n), `listed` positions in all: the plane table where the call
 // lists at least a quarter as many positions as there are planes (a table entry costs about what
 // a direct test does; the lookups are far cheaper) and the table fits the stack, else direct.
 uint32_t* planeTestRuns(PlanePath path, const PlaneArrays& a, uint64_t listed, const IndexRange* spans,
                         const uint32_t* ids, size_t n, const glm::dvec3& eye, uint32_t* dst) {
-  if (a.planes > kMaxTablePlanes || 4 * listed < a.planes) return directRuns(a, spans, ids, n, eye, dst);
-  std::array<uint8_t, kMaxTablePlanes + 8> front;  // + 8: the 8-plane steps write past a.planes
-  switch (path) {
-#ifdef WALKVIS_LIST_CULL_X86
-    case PlanePath::kAvx512:
-      frontTableAvx512(a, eye, front.data());
-      return tableRunsAvx512(a, front.data(), spans, ids, n, dst);
-    case PlanePath::kAvx2: frontTableAvx2(a, eye, front.data()); break;
-#endif
-    default: frontTableScalar(a, eye, front.data()); break;
-  }
-  return tableRuns(a, front.data(), spans, ids, n, dst);
+  FrontTable storage;
+  return planeRuns(path, a, frontTableFor(path, a, listed, eye, storage), spans, ids, n, eye, dst);
 }
 
 }  // namespace
@@ -320,7 +338,6 @@ struct ListCuller::Impl {
   std::vector<uint16_t> cell;
   std::vector<MaskChunk> chunks;
   std::vector<uint8_t> table_range;  // per range: 1 where a chunk of it uses a table
-  bool any_table = false;
   uint64_t table_positions = 0;
   // cluster, hierarchy
   std::vector<uint32_t> unit_of;
@@ -364,7 +381,9 @@ struct ListCuller::Impl {
   }
 
   // mask, one range with a table chunk: per chunk the table or (a small chunk) the plane test.
-  uint32_t* maskRange(const RangeState& rs, const glm::dvec3& eye, NormalMaskGrid::Table& table, uint32_t* dst) const;
+  // `front`: the call's plane bytes for the plane-test chunks (frontTableFor; nullptr: direct).
+  uint32_t* maskRange(const RangeState& rs, const glm::dvec3& eye, const uint8_t* front, NormalMaskGrid::Table& table,
+                      uint32_t* dst) const;
 
   // Appends indices[first + i] for every i with keep(i) true, without a branch per element.
   template <typename Keep>
@@ -463,7 +482,6 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
         }
       }
       for (const MaskChunk& c : impl->chunks) impl->table_positions += c.planes ? 0 : c.end - c.begin;
-      impl->any_table = impl->table_positions > 0;
       impl->storePlanes(input, indices);
       uint64_t plane_positions = 0, cell_positions = 0;
       for (size_t i = 0; i < n; ++i) (plane_at[i] ? plane_positions : cell_positions) += 1;
@@ -537,8 +555,8 @@ uint64_t ListCuller::bytes() const { return impl_->bytes; }
 
 uint64_t ListCuller::maskTablePositions() const { return impl_->table_positions; }
 
-uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& eye, NormalMaskGrid::Table& table,
-                                      uint32_t* dst) const {
+uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& eye, const uint8_t* front,
+                                      NormalMaskGrid::Table& table, uint32_t* dst) const {
   for (uint32_t c = rs.chunk_begin; c < rs.chunk_end; ++c) {
     const MaskChunk& chunk = chunks[c];
     const uint32_t* idx = indices.data() + chunk.begin;
@@ -546,7 +564,7 @@ uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& ey
     if (chunk.planes) {
       const IndexRange span{chunk.begin, count};
       const uint32_t zero = 0;
-      dst = planeTestRuns(path, arrays(), count, &span, &zero, 1, eye, dst);
+      dst = planeRuns(path, arrays(), front, &span, &zero, 1, eye, dst);
       continue;
     }
     glm::dvec3 axis;
@@ -618,15 +636,18 @@ uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const Backf
       dst = planeTestRuns(m.path, m.arrays(), total, m.spans.data(), ids, n, view.eye, dst);
       break;
     case ListCullMethod::kMask: {
-      if (!m.any_table) {  // every chunk below mask_list_min_chunk: the plane test throughout
-        dst = planeTestRuns(m.path, m.arrays(), total, m.spans.data(), ids, n, view.eye, dst);
+      // The plane bytes once per call, for every chunk below mask_list_min_chunk (all of them
+      // where no chunk has a table).
+      FrontTable storage;
+      const uint8_t* front = frontTableFor(m.path, m.arrays(), total, view.eye, storage);
+      if (m.table_positions == 0) {
+        dst = planeRuns(m.path, m.arrays(), front, m.spans.data(), ids, n, view.eye, dst);
         break;
       }
       NormalMaskGrid::Table table;
       for (size_t k = 0; k < n; ++k) {
-        dst = m.table_range[ids[k]] ? m.maskRange(m.ranges[ids[k]], view.eye, table, dst)
-                                    : planeTestRuns(m.path, m.arrays(), m.spans[ids[k]].count, m.spans.data(), ids + k, 1,
-                                                    view.eye, dst);
+        dst = m.table_range[ids[k]] ? m.maskRange(m.ranges[ids[k]], view.eye, front, table, dst)
+                                    : planeRuns(m.path, m.arrays(), front, m.spans.data(), ids + k, 1, view.eye, dst);
       }
       break;
     }

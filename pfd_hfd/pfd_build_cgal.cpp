@@ -174,6 +174,31 @@ constexpr uint32_t kMaxSearchLines = 12;
 // Slivers narrower than this × the region's extent are trimmed off regions (trimSlivers).
 constexpr double kSliverTolerance = 1e-9;
 
+// The largest coordinate magnitude of the pieces' boxes (at least 1): the scale of sliver_tol.
+double regionExtent(std::span<const Piece> pieces) {
+  double extent = 1.0;
+  for (const Piece& p : pieces)
+    extent = std::max({extent, std::abs(p.lox), std::abs(p.hix), std::abs(p.loz), std::abs(p.hiz)});
+  return extent;
+}
+
+// Which side of l the pieces lie on by less than `tol` only (a sliver cut off by rounded plane
+// coefficients, trimSlivers): +1 front, -1 back; 0 for none, a real crossing, or a sliver on both.
+int sliverSide(std::span<const Piece> pieces, const Line& l, double tol) {
+  if (l.constant) return 0;
+  double hi = 0.0, lo = 0.0;
+  for (const Piece& p : pieces) {
+    for (const Corner& k : p.corners) {
+      const double v = l.a * k.ax + l.b * k.az + l.c;
+      hi = std::max(hi, v);
+      lo = std::min(lo, v);
+    }
+  }
+  const double reach = tol * std::hypot(l.a, l.b);  // tol in units of the line's value
+  const bool front = hi > 0.0 && hi < reach, back = lo < 0.0 && -lo < reach;
+  return front == back ? 0 : front ? 1 : -1;
+}
+
 // +1: the region lies in the line's positive side (corners >= 0, some > 0); -1: negative side;
 // 0: the line is constant zero (a horizontal plane through the height plane); kCross: corners
 // strictly on both sides.
@@ -280,7 +305,7 @@ void clipPiece(const Piece& p, const Line& l, Counters& counters, Region* front,
   if (back) back->push_back(std::move(b));
 }
 
-void clipRegion(const Region& r, const Line& l, Counters& counters, Region* front, Region* back) {
+void clipRegion(std::span<const Piece> r, const Line& l, Counters& counters, Region* front, Region* back) {
   for (const Piece& p : r) clipPiece(p, l, counters, front, back);
 }
 
@@ -400,10 +425,7 @@ class Builder {
       if (canon == id) bucket.push_back(id);
       lines_[id].canon = canon;
     }
-    double extent = 1.0;
-    for (const Piece& p : root)
-      extent = std::max({extent, std::abs(p.lox), std::abs(p.hix), std::abs(p.loz), std::abs(p.hiz)});
-    sliver_tol_ = kSliverTolerance * extent;
+    sliver_tol_ = kSliverTolerance * regionExtent(root);
     side_.assign(lines_.size(), kUnknown);
     cross_stamp_.assign(lines_.size(), 0);
     unresolved_stamp_.assign(nn, 0);
@@ -461,7 +483,6 @@ class Builder {
   uint64_t hidden_rejected = 0;
   uint64_t varying_count = 0;
   std::vector<double> leaf_areas;
-  uint64_t slivers_trimmed = 0;  // trimSliver calls that clipped a region
   double leaf_bound_tests = 0.0;  // Σ over leaves of area × tested lines bounding the leaf
   uint64_t depth_max = 0;
   uint64_t list_fragments = 0;
@@ -944,21 +965,27 @@ class Builder {
 
   // Undecided lines ahead in the traversal (the first crossing line first), for the heuristic.
   // HFD: only from the subtree that stopped the traversal (the others may turn out hidden).
-  std::vector<uint32_t> candidates(uint32_t first, const std::vector<Item>& stack, const Region& r) {
-    std::vector<uint32_t> result{first};
-    if (options_.heuristic == PfdHeuristic::kTraversal || options_.candidates <= 1) return result;
+  struct Candidates {
+    std::vector<uint32_t> lines;
+    bool complete = false;  // every line still to be tested in the region is among them
+  };
+  Candidates candidates(uint32_t first, const std::vector<Item>& stack, const Region& r) {
+    Candidates out;
+    std::vector<uint32_t>& result = out.lines;
+    result.push_back(first);
+    if (options_.heuristic == PfdHeuristic::kTraversal || options_.candidates <= 1) return out;
     std::vector<int32_t> queue;
     size_t examined = 0;
     const size_t max_examined = 8 * static_cast<size_t>(options_.candidates);
     const size_t lowest = hfd() && !stack.empty() ? stack.size() - 1 : 0;
     const bool deep = options_.deep_candidates && !hfd();
-    cands_complete_ = deep;
+    out.complete = deep;
     for (size_t k = stack.size(); k-- > lowest && result.size() < options_.candidates && examined < max_examined;) {
       if (stack[k].emit_side != 0) {
         // A node's own fragments' lines (orientation 0) are not gathered here.
         const BspNode& own = bsp_.nodes[stack[k].node];
         for (uint32_t f = own.first_fragment; f < own.first_fragment + own.fragment_count; ++f)
-          if (frag_line_[f] != UINT32_MAX && frag_line_[f] != first && side(frag_line_[f], r) == kCross) cands_complete_ = false;
+          if (frag_line_[f] != UINT32_MAX && frag_line_[f] != first && side(frag_line_[f], r) == kCross) out.complete = false;
         continue;
       }
       queue.assign(1, stack[k].node);
@@ -978,8 +1005,8 @@ class Builder {
         queue.push_back(bsp_.nodes[id].back);
       }
     }
-    if (result.size() >= options_.candidates || examined >= max_examined) cands_complete_ = false;
-    return result;
+    if (result.size() >= options_.candidates || examined >= max_examined) out.complete = false;
+    return out;
   }
 
   // ---- Exhaustive choice on small regions (PfdOptions::search_lines) ----
@@ -1162,11 +1189,12 @@ class Builder {
   }
 
   uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r) {
-    const std::vector<uint32_t> cands = candidates(first, stack, r);
+    const Candidates found = candidates(first, stack, r);
+    const std::vector<uint32_t>& cands = found.lines;
     if (cands.size() == 1) return first;
-    if (cands_complete_ && !hfd()) {
-      const uint32_t found = searchLine(cands, r);
-      if (found != UINT32_MAX) return found;
+    if (found.complete) {  // never under HFD: its candidates stop at the frontier
+      const uint32_t searched = searchLine(cands, r);
+      if (searched != UINT32_MAX) return searched;
     }
     double total = 0.0;
     for (const Piece& p : r) total += pieceArea(p);
@@ -1191,30 +1219,18 @@ class Builder {
   bool trimSliver(Region& r, uint32_t id) {
     if (!options_.trim_slivers) return false;
     const Line& l = lines_[id];
-    if (l.constant) return false;
-    double hi = 0.0, lo = 0.0;
-    for (const Piece& p : r) {
-      for (const Corner& k : p.corners) {
-        const double v = l.a * k.ax + l.b * k.az + l.c;
-        hi = std::max(hi, v);
-        lo = std::min(lo, v);
-      }
-    }
-    const double reach = sliver_tol_ * std::hypot(l.a, l.b);
-    const bool front_sliver = hi > 0.0 && hi < reach, back_sliver = lo < 0.0 && -lo < reach;
-    if (front_sliver == back_sliver) return false;
+    const int sliver = sliverSide(r, l, sliver_tol_);
+    if (sliver == 0) return false;
     Region front, back;
     clipRegion(r, l, counters, &front, &back);
-    Region& keep = front_sliver ? back : front;
+    Region& keep = sliver > 0 ? back : front;
     if (keep.empty()) return false;
     r = std::move(keep);
     region_id_ = ++region_counter_;  // cached crossings and rings were of the untrimmed region
-    ++slivers_trimmed;
     return true;
   }
 
   std::vector<uint32_t> path_lines_;  // canonical ids of the lines tested on the way to this node
-  bool cands_complete_ = false;  // the last candidates() call found every line still to be tested
   uint64_t search_work_ = 0;      // clips made by searchLine in this tree
   double sliver_tol_ = 0.0;       // kSliverTolerance × the root region's extent
   static constexpr uint32_t kMaxTrimsPerNode = 64;  // a guard: each trim removes a line's crossing
@@ -1431,38 +1447,26 @@ Region makeRegion(std::span<const std::vector<glm::dvec2>> walkable, const std::
 // the other side, exactly (so the line then touches it); eyes closer than tol to a wall's plane
 // leave W. tol = 1e-9 × the region's extent: far above the rounding (a few ulps of the
 // coordinates, ~1e-16 relative) and far below any distance an eye keeps from a wall.
-void trimSlivers(Region& region, const BspTree& bsp, double height, Counters& counters, uint64_t& trimmed) {
-  double extent = 1.0;
-  for (const Piece& p : region) {
-    extent = std::max({extent, std::abs(p.lox), std::abs(p.hix), std::abs(p.loz), std::abs(p.hiz)});
-  }
-  const double tol = kSliverTolerance * extent;
-  Region one, front, back;
+void trimSlivers(Region& region, const BspTree& bsp, double height, Counters& counters) {
+  const double tol = kSliverTolerance * regionExtent(region);
+  Region front, back;
   for (const BspNode& node : bsp.nodes) {
     const Line l = planeLine(node.plane, height);
     if (l.constant) continue;
     const double reach = tol * std::hypot(l.a, l.b);  // tol in units of the line's value
-    for (size_t i = 0; i < region.size(); ++i) {
-      const Piece& p = region[i];
+    for (Piece& p : region) {
+      // Box filter: most lines pass far from most pieces.
       const double xmin = l.a > 0 ? p.lox : p.hix, xmax = l.a > 0 ? p.hix : p.lox;
       const double zmin = l.b > 0 ? p.loz : p.hiz, zmax = l.b > 0 ? p.hiz : p.loz;
       if (l.a * xmin + l.b * zmin + l.c > reach || l.a * xmax + l.b * zmax + l.c < -reach) continue;
-      double hi = 0.0, lo = 0.0;
-      for (const Corner& k : p.corners) {
-        const double v = l.a * k.ax + l.b * k.az + l.c;
-        hi = std::max(hi, v);
-        lo = std::min(lo, v);
-      }
-      const bool front_sliver = hi > 0.0 && hi < reach, back_sliver = lo < 0.0 && -lo < reach;
-      if (front_sliver == back_sliver) continue;  // no crossing, a real one, or all of it a sliver
-      one.assign(1, p);
+      const int sliver = sliverSide(std::span<const Piece>(&p, 1), l, tol);
+      if (sliver == 0) continue;
       front.clear();
       back.clear();
-      clipRegion(one, l, counters, &front, &back);
-      Region& keep = front_sliver ? back : front;
+      clipRegion(std::span<const Piece>(&p, 1), l, counters, &front, &back);
+      Region& keep = sliver > 0 ? back : front;
       if (keep.size() != 1) continue;  // exactly no crossing after all (or nothing left): leave it
-      region[i] = std::move(keep[0]);
-      ++trimmed;
+      p = std::move(keep[0]);
     }
   }
 }
@@ -1502,8 +1506,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
 
   Counters counters;
   Region region = makeRegion(walkable, cell, counters);
-  uint64_t trimmed = 0;
-  if (options.trim_slivers) trimSlivers(region, bsp, height, counters, trimmed);
+  if (options.trim_slivers) trimSlivers(region, bsp, height, counters);
   for (const Piece& p : region) {
     std::vector<glm::dvec2> ring;
     for (const Corner& k : p.corners) ring.emplace_back(k.ax, k.az);

@@ -10,7 +10,8 @@
 // strictly in its front half-space, n·e > d, evaluated as isFrontFacing() below. Every method is
 // conservative: it never culls a polygon that isFrontFacing() calls front-facing, for any eye
 // (view direction and field of view only sharpen a method; they never make it cull a front face,
-// except the mask option use_view_cone, which is documented where it is declared).
+// except the mask's view cone, BackfaceOptions::MaskCone::kView, which may cull front faces wholly
+// outside the view cone: documented where it is declared).
 //
 // Usage: build once (makeBackfaceCuller), then per frame cull(view, unit_culled) into a buffer of
 // unitCount() bytes that the caller owns; cull() allocates nothing. A method culls *units*: a unit
@@ -67,14 +68,23 @@ struct BackfaceOptions {
   int mask_resolution = 0;
   // mask: polygons per spatial group, each with its own view cone (paper §3.2); 0 = one group.
   uint32_t mask_group_size = 0;
-  // mask: true = the paper's §3.1 cone (view_dir, fov) for every group. That is conservative only
-  // for polygons lying inside the view cone (the ones a frustum keeps); a front face outside the
-  // view cone may be culled. false (default) = each group's cone is the cone from the eye around
-  // the group's bounding sphere (§3.2), conservative for every polygon.
-  bool mask_use_view_cone = false;
-  // mask in priority lists (list_cull.h): a chunk of fewer positions than this is tested by the
-  // exact plane test instead of a table. One table costs 0.85-1.1 us to build (N = 16), about the
-  // plane test on 1,000 listed polygons, and PFD runs average under 2 fragments; 1 = tables only.
+  // mask: which cone of directions a table is built for.
+  //   kGroups  each spatial group's cone, from the eye around the group's bounding sphere (§3.2):
+  //            conservative for every polygon, for any eye; an eye inside a group's sphere culls
+  //            nothing in that group.
+  //   kView    the paper's §3.1 cone (view_dir, fov), one table per frame for everything: it never
+  //            culls a front face that has a point inside the view cone. A front face wholly
+  //            outside the cone may be culled; it lies outside any frustum the cone holds, so it
+  //            draws nothing (walkthrough/frame.cpp passes the cone through the image's corners).
+  //   kAuto    kGroups for a whole mesh (makeBackfaceCuller: eyes around an object), kView in
+  //            priority lists (list_cull.h: eyes inside a building, whose group cones hold every
+  //            direction, so that kGroups culls nothing there; see list_cull.cpp).
+  enum class MaskCone : uint8_t { kAuto, kGroups, kView };
+  MaskCone mask_cone = MaskCone::kAuto;
+  // mask in priority lists with kGroups (list_cull.h): a chunk of fewer positions than this is
+  // tested by the exact plane test instead of a table. One table costs 0.85-1.1 us to build
+  // (N = 16), about the plane test on 1,000 listed polygons, and PFD runs average under 2
+  // fragments; 1 = tables only.
   uint32_t mask_list_min_chunk = 512;
   // cluster: T/R, the time of one cluster test over the time to render one vertex (paper §3);
   // 0 = chosen from the polygon count (clusterTrFor below).

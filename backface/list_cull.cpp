@@ -10,18 +10,22 @@
 //   polygon/region (and mask's plane-test chunks): the distinct planes of the listed polygons, in
 //     double, and each polygon's plane id; per call each distinct plane is tested once, exactly as
 //     isFrontFacing(), and each position looks its byte up (see "The batched per-frame passes");
-//   mask: the 2-byte cluster id per position and one bounding sphere per chunk of the range (the
-//     paper's per-group view cone, §3.2; chunks of mask_group_size positions, 0 = the whole range);
-//     per frame one table per chunk from the cone from the eye around its sphere. A chunk of fewer
-//     than mask_list_min_chunk positions gets the plane test instead (so on PFD lists, whose runs
-//     are far shorter than the default 512, "mask" IS the plane test; the bench prints the share
-//     of positions a table culls): a table costs ~1 us, and a table per run (20-30 ns per listed
-//     polygon measured on Freedoom MAP01, mask-tables) can never pay there. No table can be
-//     shared by the runs of a frame either: it needs one cone holding every direction from the
-//     eye to the polygons it tests, and for an eye inside the building that is the whole sphere
-//     (an empty mask). Zhang & Hoff's masks are a whole-object method: they pay on big groups;
-//     an eye inside a group's bounding sphere culls nothing in it (gen:office in z-buffer mode, one
-//     group of the whole building: 0 culled; see the bench);
+//   mask (MaskCone kView, the default here): Zhang & Hoff §3.1, one mask per call from the view
+//     cone (view_dir, fov) over the clusters the positions use, and a one-byte cluster code per
+//     position (see "mask with the view cone" below). It never culls a front face with a point
+//     inside the view cone; one wholly outside it may be culled, and draws nothing in a frustum
+//     the cone holds (what the walkthrough passes, frame.cpp). That is the paper's method, and
+//     the only mask that pays here: a cone that holds every direction from an eye inside the
+//     building to the polygons is the whole sphere;
+//   mask (MaskCone kGroups): the 2-byte cluster id per position and one bounding sphere per chunk
+//     of the range (the paper's per-group view cone, §3.2; chunks of mask_group_size positions,
+//     0 = the whole range); per frame one table per chunk from the cone from the eye around its
+//     sphere, conservative for every polygon. A chunk of fewer than mask_list_min_chunk positions
+//     gets the plane test instead (so on PFD lists, whose runs are far shorter than the default
+//     512, it IS the plane test; the bench prints the share of positions a table culls): a table
+//     costs ~1 us, and a table per run (20-30 ns per listed polygon measured on Freedoom MAP01,
+//     mask-tables) can never pay there. An eye inside a group's bounding sphere culls nothing in
+//     it (gen:office in z-buffer mode, one group of the whole building: 0 culled);
 //   cluster/hierarchy: the method's own culler built over the range's polygons (its clusters are
 //     formed per range) and the unit of each position, so that the unit flags map back in order.
 //     cluster's culling probability is taken over the box of all input vertices (the eyes of a
@@ -267,6 +271,84 @@ uint32_t* tableRuns(const PlaneArrays& a, const uint8_t* front, const IndexRange
 }
 #endif
 
+// ---- mask with the view cone (BackfaceOptions::MaskCone::kView, the default in lists): Zhang &
+// Hoff §3.1. Per call one mask from the view cone (view_dir, fov) over the clusters the culler's
+// positions use (a Doom level's ~70 of the grid's 1,536 at N = 16: walls' normals lie on the
+// cube's equator), then per position one lookup of its cluster's flag. Clusters are numbered
+// densely at build time (their `codes`), so a position stores one byte where there are at most
+// 256 of them, and with AVX-512 VBMI sixteen positions' flags are two byte permutes (vpermi2b
+// over 128-entry halves) and a blend; their ids are then compressed out in one vpcompressd.
+
+constexpr uint32_t kMaxByteCodes = 256;
+static_assert(kListCullOutSlack >= 16);  // viewMaskRunsVbmi's 16-lane store
+
+// The view cone's cap test per code: flags[k] = 1 when all four corners of code k's cluster
+// satisfy c·axis > lim, else 0, for k < codes (corner q of code k at q·stride + k; codes past the
+// clusters have zero corners, never in the cap). Baseline code, no target attribute: the float
+// operations are never contracted, so every path reads the same flags.
+void viewFlags(const float* cx, const float* cy, const float* cz, uint32_t stride, uint32_t codes,
+               const glm::vec3& axis, float lim, uint8_t* flags) {
+  for (uint32_t k = 0; k < codes; ++k) flags[k] = 1;
+  for (uint32_t q = 0; q < 4; ++q) {
+    const float* x = cx + q * stride;
+    const float* y = cy + q * stride;
+    const float* z = cz + q * stride;
+    for (uint32_t k = 0; k < codes; ++k) flags[k] &= (x[k] * axis.x + y[k] * axis.y) + z[k] * axis.z > lim ? 1 : 0;
+  }
+}
+
+// Runs ids[0, n) by the flags of their positions' codes (Code: uint8_t or uint16_t), scalar.
+template <typename Code>
+uint32_t* viewMaskRuns(const uint32_t* idx, const Code* code, const uint8_t* flags, const IndexRange* spans,
+                       const uint32_t* ids, size_t n, uint32_t* dst) {
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
+      *dst = idx[i];
+      dst += flags[code[i]] ^ 1u;
+    }
+  }
+  return dst;
+}
+
+#ifdef WALKVIS_LIST_CULL_X86
+// The same with AVX-512 VBMI, sixteen positions per step (masked loads: nothing is read past a
+// run; the full 16-lane store may write kListCullOutSlack entries past the survivors). `flags`:
+// 256 entries (codes past the culler's are 0); kCodes (64, 128 or 256) bounds the culler's codes:
+// one vpermb, one vpermi2b, or two and a blend on the top bit.
+template <uint32_t kCodes>
+[[gnu::target("avx512f,avx512bw,avx512vl,avx512vbmi,popcnt")]] uint32_t* viewMaskRunsVbmi(
+    const uint32_t* idx, const uint8_t* code, const uint8_t* flags, const IndexRange* spans, const uint32_t* ids,
+    size_t n, uint32_t* dst) {
+  const __m512i t0 = _mm512_loadu_si512(flags), t1 = _mm512_loadu_si512(flags + 64);
+  const __m512i t2 = _mm512_loadu_si512(flags + 128), t3 = _mm512_loadu_si512(flags + 192);
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    uint32_t at = s.first, left = s.count;
+    while (left > 0) {
+      const __mmask16 lanes = left >= 16 ? __mmask16(0xFFFF) : static_cast<__mmask16>((1u << left) - 1u);
+      const __m512i c = _mm512_zextsi128_si512(_mm_maskz_loadu_epi8(lanes, code + at));
+      __m512i f;
+      if constexpr (kCodes <= 64) {
+        f = _mm512_maskz_permutexvar_epi8(~__mmask64{0}, c, t0);  // GCC 12 warns on the unmasked form
+      } else if constexpr (kCodes <= 128) {
+        f = _mm512_permutex2var_epi8(t0, c, t1);
+      } else {
+        f = _mm512_mask_blend_epi8(_mm512_movepi8_mask(c), _mm512_permutex2var_epi8(t0, c, t1),
+                                   _mm512_permutex2var_epi8(t2, c, t3));
+      }
+      const __mmask16 keep = static_cast<__mmask16>(lanes & ~static_cast<uint32_t>(_mm512_test_epi8_mask(f, f)));
+      const __m512i id = _mm512_maskz_loadu_epi32(lanes, idx + at);
+      _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(keep, id));
+      dst += _mm_popcnt_u32(keep);
+      at += 16;
+      left = left > 16 ? left - 16 : 0;
+    }
+  }
+  return dst;
+}
+#endif
+
 enum class PlanePath : uint8_t { kScalar, kAvx2, kAvx512 };
 
 // The widest path the CPU has, at most what `simd` names (kAuto: AVX-512 where present; the
@@ -339,6 +421,15 @@ struct ListCuller::Impl {
   std::vector<MaskChunk> chunks;
   std::vector<uint8_t> table_range;  // per range: 1 where a chunk of it uses a table
   uint64_t table_positions = 0;
+  // mask with the view cone (view_mask): the clusters its positions use, numbered densely (codes),
+  // their four float corners (corner q of code k at q * code_stride + k, zero past `codes`), and
+  // each position's code (code8 where there are at most kMaxByteCodes, else code16)
+  bool view_mask = false;
+  bool vbmi = false;  // viewMaskRunsVbmi: AVX-512 VBMI and BW present, byte codes, simd kAuto
+  uint32_t codes = 0, code_stride = 0;
+  std::vector<float> code_x, code_y, code_z;
+  std::vector<uint8_t> code8;
+  std::vector<uint16_t> code16;
   // cluster, hierarchy
   std::vector<uint32_t> unit_of;
   mutable std::vector<uint8_t> unit_flags;  // scratch of the largest range's unit count
@@ -375,6 +466,9 @@ struct ListCuller::Impl {
     planes = static_cast<uint32_t>(nx.size());
     for (std::vector<double>* v : {&nx, &ny, &nz, &d}) v->resize(planes + kPad, 0.0);
   }
+
+  void buildViewMask(const BackfaceInput& input, std::span<const uint32_t> idx, const BackfaceOptions& options);
+  uint32_t* viewMaskCall(const BackfaceView& view, const uint32_t* ids, size_t n, uint32_t* dst) const;
 
   PlaneArrays arrays() const {
     return {nx.data(), ny.data(), nz.data(), d.data(), planes, poly_plane.data(), indices.data()};
@@ -431,10 +525,6 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
                        " indices");
     }
   }
-  if (method == ListCullMethod::kMask && options.mask_use_view_cone) {
-    throw SceneError("backface list: mask_use_view_cone may cull front faces outside the view cone; not allowed in lists");
-  }
-
   impl->ranges.resize(ranges.size());
   for (size_t r = 0; r < ranges.size(); ++r) {
     impl->ranges[r].first = ranges[r].first;
@@ -453,6 +543,10 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
       break;
     }
     case ListCullMethod::kMask: {
+      if (options.mask_cone != BackfaceOptions::MaskCone::kGroups) {
+        impl->buildViewMask(input, indices, options);
+        break;
+      }
       impl->grid = std::make_unique<NormalMaskGrid>(maskResolutionFor(n, options.mask_resolution));
       impl->cell.resize(n);
       for (size_t i = 0; i < n; ++i) impl->cell[i] = impl->grid->cell(input.polygons[indices[i]].plane.n);
@@ -585,6 +679,67 @@ uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& ey
   return dst;
 }
 
+void ListCuller::Impl::buildViewMask(const BackfaceInput& input, std::span<const uint32_t> idx,
+                                     const BackfaceOptions& options) {
+  view_mask = true;
+  const size_t n = idx.size();
+  grid = std::make_unique<NormalMaskGrid>(maskResolutionFor(n, options.mask_resolution));
+  std::vector<uint16_t> cell_at(n);
+  for (size_t i = 0; i < n; ++i) cell_at[i] = grid->cell(input.polygons[idx[i]].plane.n);
+  std::vector<uint16_t> used = cell_at;
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  codes = static_cast<uint32_t>(used.size());
+  code_stride = (codes + 15) / 16 * 16;
+  for (std::vector<float>* v : {&code_x, &code_y, &code_z}) v->assign(4 * size_t{code_stride}, 0.0f);
+  for (uint32_t k = 0; k < codes; ++k) {
+    const std::array<glm::vec3, 4> c = grid->cellCorners(used[k]);
+    for (uint32_t q = 0; q < 4; ++q) {
+      code_x[q * code_stride + k] = c[q].x;
+      code_y[q * code_stride + k] = c[q].y;
+      code_z[q * code_stride + k] = c[q].z;
+    }
+  }
+  auto codeOf = [&](uint16_t c) {
+    return static_cast<uint32_t>(std::lower_bound(used.begin(), used.end(), c) - used.begin());
+  };
+  if (codes <= kMaxByteCodes) {
+    code8.resize(n);
+    for (size_t i = 0; i < n; ++i) code8[i] = static_cast<uint8_t>(codeOf(cell_at[i]));
+  } else {
+    code16.resize(n);
+    for (size_t i = 0; i < n; ++i) code16[i] = static_cast<uint16_t>(codeOf(cell_at[i]));
+  }
+#ifdef WALKVIS_LIST_CULL_X86
+  vbmi = codes <= kMaxByteCodes && options.simd == BackfaceSimd::kAuto && path == PlanePath::kAvx512 &&
+         __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi");
+#endif
+  table_positions = n;
+  bytes = n * (code8.empty() ? sizeof(uint16_t) : sizeof(uint8_t)) + 12 * uint64_t{code_stride} * sizeof(float);
+}
+
+uint32_t* ListCuller::Impl::viewMaskCall(const BackfaceView& view, const uint32_t* ids, size_t n, uint32_t* dst) const {
+  const double len = glm::length(view.view_dir);
+  if (!(len > 0.0) || !std::isfinite(len) || !(view.fov > 0.0) || !(view.fov < M_PI)) {
+    return copyRuns(indices.data(), spans.data(), ids, n, dst);  // no cone: nothing can be culled
+  }
+  // One flag per code; zero up to kMaxByteCodes for the VBMI lookups' unused entries.
+  std::array<uint8_t, 2048> flags;
+  static_assert(6 * NormalMaskGrid::kMaxResolution * NormalMaskGrid::kMaxResolution + 1 <= 2048);
+  std::memset(flags.data() + codes, 0, codes < kMaxByteCodes ? kMaxByteCodes - codes : 0);
+  const glm::vec3 axis(view.view_dir / len);
+  const float lim = static_cast<float>(std::sin(0.5 * view.fov) + kMaskCapMargin);
+  viewFlags(code_x.data(), code_y.data(), code_z.data(), code_stride, codes, axis, lim, flags.data());
+#ifdef WALKVIS_LIST_CULL_X86
+  if (vbmi) {
+    auto* run = codes <= 64 ? &viewMaskRunsVbmi<64> : codes <= 128 ? &viewMaskRunsVbmi<128> : &viewMaskRunsVbmi<256>;
+    return run(indices.data(), code8.data(), flags.data(), spans.data(), ids, n, dst);
+  }
+#endif
+  if (!code8.empty()) return viewMaskRuns(indices.data(), code8.data(), flags.data(), spans.data(), ids, n, dst);
+  return viewMaskRuns(indices.data(), code16.data(), flags.data(), spans.data(), ids, n, dst);
+}
+
 uint32_t ListCuller::cullRange(uint32_t range, const BackfaceView& view, std::vector<uint32_t>& out) const {
   return cullRanges(std::span<const uint32_t>(&range, 1), view, out);
 }
@@ -638,6 +793,10 @@ uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const Backf
     case ListCullMethod::kMask: {
       // The plane bytes once per call, for every chunk below mask_list_min_chunk (all of them
       // where no chunk has a table).
+      if (m.view_mask) {
+        dst = m.viewMaskCall(view, ids, n, dst);
+        break;
+      }
       FrontTable storage;
       const uint8_t* front = frontTableFor(m.path, m.arrays(), total, view.eye, storage);
       if (m.table_positions == 0) {

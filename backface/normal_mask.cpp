@@ -13,7 +13,7 @@
 //
 // Perspective (§3.1 vs §3.2): the paper's view cone (view direction, field of view) covers the
 // directions to polygons inside the view cone only; a front face outside it (behind the eye, say)
-// may be culled. That is the option mask_use_view_cone. By default each spatial group of polygons
+// may be culled. That is BackfaceOptions::MaskCone::kView. By default each spatial group of polygons
 // gets its own cone, the cone from the eye around the group's bounding sphere (§3.2, "a viewing
 // cone to each object group"), which holds every direction from the eye to the group: conservative
 // for every polygon. An eye inside a group's sphere culls nothing in that group.
@@ -42,13 +42,6 @@
 
 namespace walkvis {
 
-namespace {
-// Margin on the cap test n̂·a > sin θ, evaluated in single precision: the float corner
-// directions, axis and limit (relative error 2⁻²⁴ each) and the three-term sum stay below
-// 5e-7 in all; 2e-6 leaves a factor four and only spares clusters within ~2e-6 rad of the rim.
-constexpr double kCapMargin = 2e-6;
-}  // namespace
-
 int maskResolutionFor(size_t polygons, int requested) {
   if (requested != 0) return requested;
   int n = 4;
@@ -66,7 +59,7 @@ NormalMaskGrid::NormalMaskGrid(int n) : n_(n) {
     const int k = face / 2;
     const double sign = face % 2 == 0 ? 1.0 : -1.0;
     const int a = k == 0 ? 1 : 0, b = k == 2 ? 1 : 2;
-    // Rows padded to a multiple of 4 with zero vectors: 0 > limit (>= kCapMargin) never hits.
+    // Rows padded to a multiple of 4 with zero vectors: 0 > limit (>= kMaskCapMargin) never hits.
     for (auto& axis : corner_[static_cast<size_t>(face)]) axis.assign(m * stride_, 0.0f);
     for (size_t i = 0; i < m; ++i) {
       for (size_t j = 0; j < m; ++j) {
@@ -100,6 +93,21 @@ uint16_t NormalMaskGrid::cell(const glm::dvec3& n) const {
   return static_cast<uint16_t>(face * n_ * n_ + index(n[a]) * n_ + index(n[b]));
 }
 
+std::array<glm::vec3, 4> NormalMaskGrid::cellCorners(uint16_t cell) const {
+  std::array<glm::vec3, 4> out{};
+  if (cell >= 6 * n_ * n_) return out;  // kNeverCell and beyond: zero vectors, never in a cap
+  const int face = cell / (n_ * n_), i = cell / n_ % n_, j = cell % n_;
+  const auto& c = corner_[static_cast<size_t>(face)];
+  int k = 0;
+  for (int di = 0; di < 2; ++di) {
+    for (int dj = 0; dj < 2; ++dj) {
+      const size_t q = static_cast<size_t>(i + di) * stride_ + static_cast<size_t>(j + dj);
+      out[static_cast<size_t>(k++)] = glm::vec3(c[0][q], c[1][q], c[2][q]);
+    }
+  }
+  return out;
+}
+
 // The cap n̂·axis > sin θ is spherically convex and a cluster is the cone over a square of the
 // cube face, so all four corners in the cap puts every normal of the cluster in it.
 void NormalMaskGrid::backTable(const glm::dvec3& axis, double sin_theta, Table& table) const {
@@ -110,7 +118,7 @@ void NormalMaskGrid::backTable(const glm::dvec3& axis, double sin_theta, Table& 
   std::memset(table.data(), 0, cell_count + kTablePadding);
   std::memset(table.data() + kNeverCell, 0, table.size() - kNeverCell);
   const size_t m = static_cast<size_t>(n_) + 1;
-  const double limit = sin_theta + kCapMargin;
+  const double limit = sin_theta + kMaskCapMargin;
   if (!(limit < 1.0)) return;  // the cap is empty
   // The cap's angular radius is ρ = acos(limit); a face's normals lie within 54.74° (acos(1/√3))
   // of its centre; the cap cannot hold a corner of a face whose centre is ρ + 54.74° or more
@@ -255,7 +263,7 @@ struct Group {
 class NormalMaskCuller final : public BackfaceCuller {
  public:
   NormalMaskCuller(const BackfaceInput& input, const BackfaceOptions& options)
-      : grid_(maskResolutionFor(input.polygons.size(), options.mask_resolution)), use_view_cone_(options.mask_use_view_cone) {
+      : grid_(maskResolutionFor(input.polygons.size(), options.mask_resolution)), use_view_cone_(options.mask_cone == BackfaceOptions::MaskCone::kView) {
     const size_t count = input.polygons.size();
     polygon_count_ = count;
 

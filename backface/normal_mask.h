@@ -48,6 +48,12 @@ class NormalMaskGrid {
   // around `axis` (unit length); all other cells 0, and 0 at the kTablePadding entries after the
   // last cell, at kNeverCell and in the padding; the entries in between are left as they were.
   void backTable(const glm::dvec3& axis, double sin_theta, Table& table) const;
+  // The four unit corner directions of cluster `cell`, in single precision, exactly as backTable
+  // tests them (cell i, j of a face: corners (i, j), (i, j+1), (i+1, j), (i+1, j+1)); zero vectors
+  // for kNeverCell or any id >= 6·N² (never inside a cap: its limit is >= kMaskCapMargin > 0). A
+  // cluster is back-facing for a cone exactly when all four satisfy c·axis > float(sin θ +
+  // kMaskCapMargin), evaluated in float as (c.x·a.x + c.y·a.y) + c.z·a.z.
+  std::array<glm::vec3, 4> cellCorners(uint16_t cell) const;
 
  private:
   int n_;
@@ -56,6 +62,11 @@ class NormalMaskGrid {
   // is 4 corners per SSE operation), structure of arrays: corner_[face][axis][row * stride_ + column].
   std::array<std::array<std::vector<float>, 3>, 6> corner_;
 };
+
+// Margin on the cap test n̂·axis > sin θ, evaluated in single precision: the float corner
+// directions, axis and limit (relative error 2⁻²⁴ each) and the three-term sum stay below 5e-7 in
+// all; 2e-6 leaves a factor four and only spares clusters within ~2e-6 rad of the rim.
+inline constexpr double kMaskCapMargin = 2e-6;
 
 // A cone from `eye` around the sphere (center, radius) holding every direction from the eye to the
 // sphere: returns false when the eye is inside the sphere (or the input is not finite); otherwise

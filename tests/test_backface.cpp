@@ -206,7 +206,7 @@ TEST(Backface, ConeCullsFrontFacesOnlyOfZeroArea) {
 TEST(Backface, MaskViewConeKeepsFrontFacesInsideTheCone) {
   const Scene s = loadScene("gen:sphere");
   BackfaceOptions options;
-  options.mask_use_view_cone = true;
+  options.mask_cone = BackfaceOptions::MaskCone::kView;
   const auto culler = makeBackfaceCuller(BackfaceMethod::kMask, backfaceInput(s), options);
   std::vector<uint8_t> units(culler->unitCount()), culled(s.polygons.size());
   std::mt19937_64 rng(17);

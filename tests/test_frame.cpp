@@ -108,6 +108,48 @@ TEST(FrameBuilder, FourModesDrawTheSameIdsImage) {
   EXPECT_LE(differing, pixels / 1000) << differing << " of " << pixels << " pixels differ";
 }
 
+// The normal mask culls from the view cone through the image's corners (list_cull.h): it may drop
+// front faces, but only ones wholly outside that cone, which the frustum clips away. So with it the
+// three order sources draw exactly the ids image of the exact plane test (GL back-face culling on
+// in both: the mask leaves some back faces in), for cameras looking up and down as well as level.
+TEST(FrameBuilder, MaskDrawsWhatThePlaneTestDraws) {
+  Offscreen o = makeOffscreen();
+  WorldOptions options;
+  options.build_pfd = true;
+  options.cull = ListCullMethod::kMask;
+  const World mask_world = openWorld("gen:office", options);
+  options.cull = ListCullMethod::kPolygon;
+  const World plane_world = openWorld("gen:office", options);
+  o.drawer.upload(mask_world.trees.bsp, mask_world.scene);
+  FrameBuilder builder;
+  std::vector<uint32_t> draw, want, got;
+  uint64_t differing = 0, mask_culled = 0, plane_culled = 0;
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> pitch(-0.7, 0.7);
+  DrawSettings z;
+  z.style = DrawStyle::kIds;
+  z.cull_back_faces = true;
+  for (FreeCamera camera : officeCameras(mask_world, 16, 29)) {
+    camera.pitch = pitch(rng);
+    for (OrderMode mode : {OrderMode::kZBuffer, OrderMode::kBsp, OrderMode::kPfd}) {
+      z.depth_test = mode == OrderMode::kZBuffer;
+      plane_culled += builder.build(plane_world, camera, mode, draw).culled;
+      o.drawer.draw(camera, draw, z);
+      o.drawer.readIds(kW, kH, want);
+      const FrameStats s = builder.build(mask_world, camera, mode, draw);
+      EXPECT_EQ(s.used, mode);
+      mask_culled += s.culled;
+      o.drawer.draw(camera, draw, z);
+      o.drawer.readIds(kW, kH, got);
+      for (size_t k = 0; k < got.size(); ++k) differing += got[k] != want[k];
+    }
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(mask_culled, plane_culled / 10) << "the mask culls a real share";
+  RecordProperty("mask_culled", std::to_string(mask_culled));
+  RecordProperty("plane_culled", std::to_string(plane_culled));
+}
+
 TEST(FrameBuilder, WrongOrderIsCaught) {
   // The check above can fail: drawing the BSP order reversed (front to back) differs a lot.
   Offscreen o = makeOffscreen();

@@ -1,5 +1,6 @@
 // Backface culling inside priority lists (backface/list_cull.h): for every method, cullRange keeps
-// each range's order, returns the number it dropped, and never drops a front-facing polygon, over
+// each range's order, returns the number it dropped, and never drops a front-facing polygon (mask
+// with its default view cone: none that reaches into the view cone), over
 // 10,000 random perspective eyes per mesh; ranges cut from random orders of meshes, from the BSP's
 // back-to-front order (the BSP path, eyes anywhere) and from a PFD tree's runs built with
 // drop_back_faces = false (eyes on its height plane, the runs its query yields).
@@ -14,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "backface/list_cull.h"
+#include "backface/normal_mask.h"
 #include "backface_test_util.h"
 #include "bsp/bsp.h"
 #include "pfd_hfd/pfd.h"
@@ -42,15 +44,22 @@ std::vector<CullSetup> cullSetups() {
                            ListCullMethod::kCluster, ListCullMethod::kHierarchy, ListCullMethod::kRegion}) {
     out.push_back({std::string(listCullMethodName(m)), m, {}});
   }
-  BackfaceOptions tables;
+  BackfaceOptions groups;
+  groups.mask_cone = BackfaceOptions::MaskCone::kGroups;
+  out.push_back({"mask/groups", ListCullMethod::kMask, groups});
+  BackfaceOptions view_n8;
+  view_n8.mask_resolution = 8;
+  view_n8.mask_cone = BackfaceOptions::MaskCone::kView;
+  out.push_back({"mask/view/N8", ListCullMethod::kMask, view_n8});
+  BackfaceOptions tables = groups;
   tables.mask_list_min_chunk = 1;  // a table for every chunk, however small
   out.push_back({"mask/tables", ListCullMethod::kMask, tables});
-  BackfaceOptions chunks;
+  BackfaceOptions chunks = groups;
   chunks.mask_group_size = 16;
   chunks.mask_resolution = 8;
   chunks.mask_list_min_chunk = 1;
   out.push_back({"mask/chunks16/N8", ListCullMethod::kMask, chunks});
-  BackfaceOptions mixed;
+  BackfaceOptions mixed = groups;
   mixed.mask_group_size = 40;
   mixed.mask_list_min_chunk = 25;  // tables for full chunks, the plane test for most range tails
   out.push_back({"mask/chunks40/min25", ListCullMethod::kMask, mixed});
@@ -66,14 +75,39 @@ std::vector<CullSetup> cullSetups() {
 
 struct Counts {
   uint64_t false_culls = 0, culled = 0, back = 0, listed = 0;
+  uint64_t culled_outside_view = 0;  // mask's view cone: front faces culled wholly outside the cone
 };
 
+bool viewConeMask(const CullSetup& setup) {
+  return setup.method == ListCullMethod::kMask && setup.options.mask_cone != BackfaceOptions::MaskCone::kGroups;
+}
+
+// A front face that the view-cone mask may cull: its unit normal n̂ makes n̂·u > 0 for every
+// direction u of the cone, i.e. n̂·a > sin θ (then its front half-space, where the polygon lies,
+// misses the cone), checked in double; and, as a brute-force check beside that argument, none of
+// its vertices and its centroid lies inside the cone.
+bool outsideViewCone(const BackfaceInput& input, uint32_t p, const BackfaceView& view) {
+  const Polygon& poly = input.polygons[p];
+  const glm::dvec3 a = glm::normalize(view.view_dir);
+  const double sin_half = std::sin(0.5 * view.fov), cos_half = std::cos(0.5 * view.fov);
+  if (!(glm::dot(glm::normalize(poly.plane.n), a) > sin_half)) return false;
+  glm::dvec3 centroid(0.0);
+  for (uint32_t k = 0; k < poly.vertex_count; ++k) {
+    const glm::dvec3& v = input.vertices[poly.first_vertex + k];
+    centroid += v / static_cast<double>(poly.vertex_count);
+    if (glm::dot(v - view.eye, a) > cos_half * glm::length(v - view.eye)) return false;
+  }
+  return !(glm::dot(centroid - view.eye, a) > cos_half * glm::length(centroid - view.eye));
+}
+
 // Checks `out` (after its first `base` entries) against the range: an in-order subsequence whose
-// dropped entries are all back-facing; polygon and region drop exactly the back faces, none
-// drops nothing; `culled` = the number dropped.
+// dropped entries are all back-facing (mask with the view cone: or wholly outside the view
+// cone); polygon and region drop exactly the back faces, none drops nothing; `culled` = the
+// number dropped.
 void verify(const BackfaceInput& input, std::span<const uint32_t> range, const std::vector<uint32_t>& out, size_t base,
-            uint32_t culled, const CullSetup& setup, const glm::dvec3& eye, Counts& counts) {
+            uint32_t culled, const CullSetup& setup, const BackfaceView& view, Counts& counts) {
   ASSERT_EQ(out.size() - base + culled, range.size()) << setup.label;
+  const glm::dvec3& eye = view.eye;
   size_t k = base;
   uint64_t back = 0;
   for (uint32_t p : range) {
@@ -82,7 +116,11 @@ void verify(const BackfaceInput& input, std::span<const uint32_t> range, const s
     if (k < out.size() && out[k] == p) {
       ++k;
     } else {
-      counts.false_culls += front;
+      if (front && viewConeMask(setup) && outsideViewCone(input, p, view)) {
+        ++counts.culled_outside_view;
+      } else {
+        counts.false_culls += front;
+      }
       ++counts.culled;
     }
   }
@@ -153,12 +191,15 @@ void expectNoFrontFaceCulled(const Scene& s, uint64_t seed, uint32_t mean) {
         const uint32_t culled = culler.cullRange(r, view, out);
         ASSERT_EQ(out[0], 0xDEADBEEFu);
         verify(input, std::span<const uint32_t>(indices).subspan(ranges[r].first, ranges[r].count), out, 1, culled,
-               setup, view.eye, counts);
+               setup, view, counts);
       }
     }
     EXPECT_EQ(counts.false_culls, 0u);
     if (setup.method != ListCullMethod::kNone) {
       EXPECT_GT(counts.culled, 0u);
+    }
+    if (viewConeMask(setup)) {
+      testing::Test::RecordProperty(setup.label + "_culled_outside_view", std::to_string(counts.culled_outside_view));
     }
     testing::Test::RecordProperty(setup.label + "_effectiveness",
                    std::to_string(static_cast<double>(counts.culled) / static_cast<double>(std::max<uint64_t>(counts.back, 1))));
@@ -229,11 +270,13 @@ TEST(ListCull, BspOrderRangesNoFrontFaceCulled) {
     for (int e = 0; e < kEyes; ++e) {
       BackfaceView view;
       view.eye = glm::dvec3(u(rng), 0.3 * u(rng), u(rng));
+      view.view_dir = randomUnit(rng);
+      view.fov = (30.0 + 4.0 * (u(rng) + 5.0)) * M_PI / 180.0;  // 30..150 degrees
       const uint32_t r = e % 50 == 0 ? static_cast<uint32_t>(ranges.size() - 1) : static_cast<uint32_t>(rng() % (ranges.size() - 1));
       out.clear();
       const uint32_t culled = culler.cullRange(r, view, out);
       verify(input, std::span<const uint32_t>(order).subspan(ranges[r].first, ranges[r].count), out, 0, culled, setup,
-             view.eye, counts);
+             view, counts);
     }
     EXPECT_EQ(counts.false_culls, 0u);
     if (setup.method != ListCullMethod::kNone) {
@@ -274,6 +317,8 @@ TEST(ListCull, PfdRunsNoFrontFaceCulled) {
       const glm::dvec2 p = samplePfdRegion(tree, rng_state);
       BackfaceView view;
       view.eye = glm::dvec3(p.x, height, p.y);
+      const double yaw = 2.0 * M_PI * static_cast<double>(rng_state % 4096) / 4096.0;
+      view.view_dir = glm::dvec3(std::cos(yaw), 0.0, std::sin(yaw));
       pfdQueryRuns(tree, view.eye, runs);
       for (const PfdRun& run : runs) {
         const auto it = run_index.find({run.first, run.count});
@@ -281,11 +326,15 @@ TEST(ListCull, PfdRunsNoFrontFaceCulled) {
         const size_t base = out.size();
         const uint32_t culled = culler.cullRange(it->second, view, out);
         verify(input, std::span<const uint32_t>(tree.fragment_ids).subspan(run.first, run.count), out, base, culled,
-               setup, view.eye, counts);
+               setup, view, counts);
       }
       out.clear();
     }
     EXPECT_EQ(counts.false_culls, 0u);
+    // An eye inside the building is inside every group's sphere: the group masks cull nothing.
+    if (setup.method != ListCullMethod::kNone && (setup.method != ListCullMethod::kMask || viewConeMask(setup))) {
+      EXPECT_GT(counts.culled, 0u);
+    }
     listed_back = counts.back;
   }
   // With drop_back_faces = false the lists hold back faces for the run-time methods to cull.
@@ -298,7 +347,8 @@ TEST(ListCull, PfdRunsNoFrontFaceCulled) {
 // gen:office in z-buffer mode (one range of all fragments, eyes inside at eye height): clustered
 // by the probability over the scene's box, the clustered test culls a real share of what the plane
 // test culls (with the paper's box around each cluster it culled nothing: one cluster per wall
-// orientation); the mask of one group culls nothing (the eye is inside its sphere: inherent).
+// orientation); the mask of one group culls nothing (the eye is inside its sphere: inherent), the
+// mask from the view cone culls (the default in lists).
 TEST(ListCull, OfficeEyesInsideClusterCulls) {
   const Scene scene = loadScene("gen:office");
   const BspTree bsp = buildBsp(scene);
@@ -315,16 +365,18 @@ TEST(ListCull, OfficeEyesInsideClusterCulls) {
     eyes.emplace_back(b.lo.x + u(rng) * (b.hi.x - b.lo.x), height, b.lo.z + u(rng) * (b.hi.z - b.lo.z));
   }
   auto culledPerEye = [&](ListCullMethod method, const BackfaceOptions& options) {
+    Counts counts;
     const ListCuller culler = ListCuller::build(input, all, std::span<const IndexRange>(&range, 1), method, options);
     std::vector<uint32_t> out;
-    Counts counts;
     const CullSetup setup{"office", method, options};
     for (const glm::dvec3& eye : eyes) {
       out.clear();
       BackfaceView view;
       view.eye = eye;
+      const double yaw = 2.0 * M_PI * u(rng);
+      view.view_dir = glm::dvec3(std::cos(yaw), 0.0, std::sin(yaw));
       const uint32_t culled = culler.cullRange(0, view, out);
-      verify(input, all, out, 0, culled, setup, eye, counts);
+      verify(input, all, out, 0, culled, setup, view, counts);
     }
     EXPECT_EQ(counts.false_culls, 0u);
     return static_cast<double>(counts.culled) / static_cast<double>(eyes.size());
@@ -335,7 +387,12 @@ TEST(ListCull, OfficeEyesInsideClusterCulls) {
   RecordProperty("cluster_culled_per_eye", std::to_string(cluster));
   EXPECT_GT(plane, 100.0);
   EXPECT_GT(cluster, 0.25 * plane);
-  EXPECT_EQ(culledPerEye(ListCullMethod::kMask, {}), 0.0);
+  BackfaceOptions groups;
+  groups.mask_cone = BackfaceOptions::MaskCone::kGroups;
+  EXPECT_EQ(culledPerEye(ListCullMethod::kMask, groups), 0.0);
+  const double mask = culledPerEye(ListCullMethod::kMask, {});
+  RecordProperty("mask_culled_per_eye", std::to_string(mask));
+  EXPECT_GT(mask, 0.1 * plane);
 }
 
 
@@ -401,6 +458,61 @@ void expectBatchEqualsSingles(const Scene& s, uint64_t seed) {
 TEST(ListCull, CullRangesEqualsCullRangeSphere) { expectBatchEqualsSingles(loadScene("gen:sphere?tris=600"), 61); }
 TEST(ListCull, CullRangesEqualsCullRangeSoup) { expectBatchEqualsSingles(randomSoup(62, 200), 62); }
 TEST(ListCull, CullRangesEqualsCullRangeBuilding) { expectBatchEqualsSingles(building(63), 63); }
+
+// The view-cone mask's paths (AVX-512 VBMI byte permutes where the CPU has them, else scalar; byte
+// codes up to 256 clusters, two-byte codes beyond) give the same survivors, and the mask culls
+// exactly the positions whose cluster's four corners lie in the view cone's cap: a reference
+// computed here from the grid per position, on a building (few clusters) and a sphere at N = 16
+// (more than 256 clusters), random eyes, directions and fields of view including degenerate ones.
+TEST(ListCull, MaskViewPathsAgreeWithTheGrid) {
+  for (const Scene& s : {building(91), loadScene("gen:sphere?tris=6000")}) {
+    SCOPED_TRACE(s.name);
+    const BackfaceInput input = backfaceInput(s);
+    std::mt19937_64 rng(92);
+    auto [indices, ranges] = randomLists(s.polygons.size(), 4, 60, rng);
+    std::vector<uint32_t> all_ids(ranges.size());
+    for (uint32_t r = 0; r < all_ids.size(); ++r) all_ids[r] = r;
+    BackfaceOptions fast, scalar;
+    fast.mask_resolution = scalar.mask_resolution = 16;
+    scalar.simd = BackfaceSimd::kScalar;
+    const ListCuller a = ListCuller::build(input, indices, ranges, ListCullMethod::kMask, fast);
+    const ListCuller b = ListCuller::build(input, indices, ranges, ListCullMethod::kMask, scalar);
+    const NormalMaskGrid grid(16);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const Frame f = frameOf(s);
+    uint64_t culled = 0;
+    std::vector<uint32_t> got_a, got_b, want;
+    for (int e = 0; e < 400; ++e) {
+      BackfaceView view;
+      view.eye = randomEye(s, rng, f);
+      view.view_dir = e % 50 == 0 ? glm::dvec3(0.0) : (0.5 + 2.0 * u(rng)) * randomUnit(rng);
+      view.fov = e % 50 == 1 ? M_PI : (5.0 + 170.0 * u(rng)) * M_PI / 180.0;
+      got_a.assign(1, 5u);
+      got_b.assign(1, 5u);
+      const uint32_t ca = a.cullRanges(all_ids, view, got_a);
+      const uint32_t cb = b.cullRanges(all_ids, view, got_b);
+      ASSERT_EQ(got_a, got_b) << "eye " << e;
+      ASSERT_EQ(ca, cb);
+      want.assign(1, 5u);
+      const bool usable = glm::length(view.view_dir) > 0.0 && view.fov < M_PI;
+      const glm::vec3 axis = usable ? glm::vec3(glm::normalize(view.view_dir)) : glm::vec3(0.0f);
+      const float lim = static_cast<float>(std::sin(0.5 * view.fov) + kMaskCapMargin);
+      for (const IndexRange& r : ranges) {
+        for (uint32_t k = 0; k < r.count; ++k) {
+          const uint32_t p = indices[r.first + k];
+          bool back = usable;
+          for (const glm::vec3& c : grid.cellCorners(grid.cell(input.polygons[p].plane.n))) {
+            back = back && (c.x * axis.x + c.y * axis.y) + c.z * axis.z > lim;
+          }
+          if (!back) want.push_back(p);
+        }
+      }
+      ASSERT_EQ(got_a, want) << "eye " << e;
+      culled += ca;
+    }
+    EXPECT_GT(culled, 0u);
+  }
+}
 
 // The shared-plane table (each distinct plane tested once per call, SIMD) and the direct test
 // against isFrontFacing() on hard cases: eyes a few ulps either side of a plane, exactly on it,
@@ -477,9 +589,6 @@ TEST(ListCull, BadInput) {
   EXPECT_THROW(ListCuller::build(input, indices, outside, ListCullMethod::kPolygon), SceneError);
   const std::vector<uint32_t> bad_index{0, static_cast<uint32_t>(s.polygons.size())};
   EXPECT_THROW(ListCuller::build(input, bad_index, ok, ListCullMethod::kPolygon), SceneError);
-  BackfaceOptions view_cone;
-  view_cone.mask_use_view_cone = true;
-  EXPECT_THROW(ListCuller::build(input, indices, ok, ListCullMethod::kMask, view_cone), SceneError);
   BackfaceOptions bad_n;
   bad_n.mask_resolution = 19;
   EXPECT_THROW(ListCuller::build(input, indices, ok, ListCullMethod::kMask, bad_n), SceneError);

@@ -26,9 +26,14 @@
 // are culled in order (timed: one cullRanges call over the query's run ids with the order written
 // out, as a frame does; none too; cone: cull, expansion and order). Figures are per listed
 // polygon; over_none is ns/poly minus none's (the same call writing the runs out unculled), the
-// cost the culling adds. mask is Zhang & Hoff's table on chunks of at least mask_list_min_chunk
-// positions and the plane test on smaller ones (nearly every PFD run; a line under each mask row
-// says what share of the pool a table culls); mask-tables builds a table for every run. Then the BSP path: every fragment of the level's BSP
+// cost the culling adds. mask is Zhang & Hoff's mask from each eye's view cone (60 degrees here),
+// one per query; it may also drop front faces wholly outside the cone (no pixels in a frustum the
+// cone holds): those are counted apart (culled_outside_view, a line under the row), not as false
+// culls nor in culled_ratio and effectiveness. mask-groups and mask-tables are the per-group
+// sphere cones (conservative for every polygon): a table on chunks of at least
+// mask_list_min_chunk positions and the plane test on smaller ones (nearly every PFD run; a line
+// under each row says what share of the pool a table culls); mask-tables builds a table for every
+// run. Then the BSP path: every fragment of the level's BSP
 // with eyes anywhere in the scene's box, the same table as for meshes, its cluster rows clustered
 // for eyes in that box and cluster-paper with the paper's near field around each cluster.
 // Any scene with floor levels works for --lists (e.g. gen:office: eyes inside a building). Each table ends with the issue's
@@ -443,6 +448,7 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
   base.mask_resolution = args.mask_resolution;
   base.cluster_tr = args.tr;
   BackfaceOptions chunked = base;
+  chunked.mask_cone = BackfaceOptions::MaskCone::kGroups;
   chunked.mask_group_size = args.mask_group;
   std::vector<ListRow> rows;
   for (ListCullMethod m : {ListCullMethod::kNone, ListCullMethod::kPolygon, ListCullMethod::kMask, ListCullMethod::kCluster,
@@ -450,9 +456,12 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
     rows.push_back({std::string(listCullMethodName(m)), m, false, base});
   }
   rows.insert(rows.begin() + 3, ListRow{"mask-groups", ListCullMethod::kMask, false, chunked});
-  // mask-tables: Zhang & Hoff's table for every chunk however small (mask uses the plane test on
+  // mask is Zhang & Hoff's mask from the view cone (the default in lists); mask-groups and
+  // mask-tables the per-group sphere cones (kGroups), conservative for every polygon:
+  // mask-tables with a table for every chunk however small (kGroups uses the plane test on
   // chunks under mask_list_min_chunk positions, where a table cannot pay; list_cull.cpp).
   BackfaceOptions tables = base;
+  tables.mask_cone = BackfaceOptions::MaskCone::kGroups;
   tables.mask_list_min_chunk = 1;
   rows.insert(rows.begin() + 4, ListRow{"mask-tables", ListCullMethod::kMask, false, tables});
   rows.push_back({"cone", ListCullMethod::kNone, true, base});
@@ -521,7 +530,12 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
       }
       return culled;
     };
-    uint64_t culled_total = 0, false_culls = 0, front_kept = 0, false_invisible = 0;
+    // The view-cone mask may cull front faces wholly outside the view cone (list_cull.h): those
+    // whose unit normal n̂ has n̂·a > sin θ (their front half-space misses the cone) are counted as
+    // culled_outside_view, not as false culls, and not in the effectiveness (back faces culled).
+    const bool view_mask = row.method == ListCullMethod::kMask && !row.cone &&
+                           row.options.mask_cone != BackfaceOptions::MaskCone::kGroups;
+    uint64_t culled_total = 0, false_culls = 0, front_kept = 0, false_invisible = 0, outside_view = 0;
     for (const Eye& eye : eyes) {
       culled_total += cullEye(eye);
       if (row.cone) {  // which culled front faces the library sees no area in
@@ -549,7 +563,30 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
       }
       front_kept = 0;
       for (uint32_t f : order) front_kept += isFrontFacing(bsp.fragments[f].plane, eye.view.eye);
-      false_culls += front_listed - front_kept;
+      uint64_t front_culled = front_listed - front_kept;
+      if (view_mask && front_culled > 0) {
+        // Which front faces went: the survivors are an in-order subsequence of the runs.
+        const glm::dvec3 axis = glm::normalize(eye.view.view_dir);
+        const double sin_half = std::sin(0.5 * eye.view.fov);
+        size_t at = 0;
+        for (uint32_t r : eye.ranges) {
+          const IndexRange& range = ranges[eye.tree][r];
+          for (uint32_t k = 0; k < range.count; ++k) {
+            const uint32_t f = tree.fragment_ids[range.first + k];
+            if (at < order.size() && order[at] == f) {
+              ++at;
+              continue;
+            }
+            const Plane& plane = bsp.fragments[f].plane;
+            if (isFrontFacing(plane, eye.view.eye) && glm::dot(glm::normalize(plane.n), axis) > sin_half) {
+              ++outside_view;
+              --front_culled;
+            }
+          }
+        }
+      }
+      culled_total -= front_listed - front_kept - front_culled;  // effectiveness: back faces only
+      false_culls += front_culled;
     }
     std::vector<double> ns;
     for (int run = 0; run < args.runs; ++run) {
@@ -576,12 +613,17 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
                        {"build_seconds", build_seconds}});
     const double table_share = static_cast<double>(table_positions) / static_cast<double>(std::max<uint64_t>(pool, 1));
     if (row.method == ListCullMethod::kMask && !row.cone) methods.back()["table_positions_ratio"] = table_share;
+    if (view_mask) methods.back()["culled_outside_view"] = static_cast<double>(outside_view) / static_cast<double>(listed);
     if (!args.json) {
       std::printf("  %-13s %8.1f %8.1f %9.3f %8.2f %9.3f %7llu %9.3f\n", row.label.c_str(), 100.0 * culled_ratio,
                   100.0 * effectiveness, medianOf(ns), bytes_per_polygon, medianOf(ns) - none_ns,
                   static_cast<unsigned long long>(false_culls), build_seconds);
       if (row.cone && false_invisible > 0) printZeroAreaNote(false_invisible);
-      if (row.method == ListCullMethod::kMask && !row.cone) {
+      if (view_mask) {
+        std::printf("    %s: Zhang & Hoff's mask from the view cone; besides the back faces it dropped %.1f%% of the\n"
+                    "    listed polygons, front faces wholly outside the view cone (no pixels in the frustum)\n",
+                    row.label.c_str(), 100.0 * static_cast<double>(outside_view) / static_cast<double>(listed));
+      } else if (row.method == ListCullMethod::kMask && !row.cone) {
         std::printf("    %s: %.1f%% of the pool in chunks culled by a Zhang & Hoff table, the rest by the plane test\n",
                     row.label.c_str(), 100.0 * table_share);
       }

@@ -68,6 +68,17 @@ struct PfdOptions {
   // clips one tree may spend on it (then the greedy choice), so big trees pay a bounded amount.
   uint32_t search_lines = 8;
   uint64_t search_work = 200'000;
+  // With search_lines > 0: at the root the search also applies where up to this many lines cross
+  // the whole region (capped at 12), with its own budget of clips (not spent from search_work). A
+  // completed search's memo holds the best line for every region below it, which the nodes below
+  // then follow (no search of their own), so a tree whose root search completes is optimal among
+  // trees testing these lines (PfdStats::tests_optimal). Only trees of few lines (up to ~100 nodes)
+  // get there: big trees pay nothing. A 12-line search costs up to ~110k clips (freedoom2 MAP29), 2M
+  // bounds the worst case (~0.5 s). freedoom2, 16 maps with small trees above 1.3 × entropy (with
+  // the trimming of slivers thinner than rounding): such trees 46 -> 22, 7 of them now flagged
+  // optimal; MAP27 and MAP11 build times unchanged.
+  uint32_t root_search_lines = 12;
+  uint64_t root_search_work = 2'000'000;
   // Clip off W the slivers (narrower than 1e-9 of the region's extent) that BSP lines cut from it
   // only because plane coefficients are rounded (pfd_build_cgal.cpp, trimSlivers): each would be
   // a test for a leaf of no area. Eyes that close to a wall's plane leave the region.
@@ -131,6 +142,19 @@ struct PfdStats {
   // tests can meet that target. Without HFD the leaves are the same for every order. Computed by
   // the build; not stored in the tree file (0 after loading).
   double tests_cell_bound = 0.0;
+  // The exact mean tests: Σ over leaves of the area fraction × the tests on its path (tests_mean
+  // samples it). Build-only, like tests_cell_bound.
+  double tests_area_mean = 0.0;
+  // The mean tests the exhaustive search at the root predicted (PfdOptions::search_lines; double
+  // regions): 0 where no search completed there. Build-only.
+  double tests_search_mean = 0.0;
+  // No decision tree testing the BSP lines that cross the region has fewer mean tests (so where
+  // tests_area_mean > 1.3 × the entropy bound, reordering the tests cannot meet that target): the
+  // whole test order came from one completed exhaustive search at the root, followed down to every
+  // leaf, and tests_area_mean equals tests_search_mean (relative 1e-9); or tests_area_mean meets
+  // tests_huffman_bound or tests_cell_bound; or the tree has no test. Build-only (false after
+  // loading).
+  bool tests_optimal = false;
   double region_area = 0.0;
   uint64_t visibility_tests = 0;   // HFD: fragment-versus-region queries
   uint64_t visibility_rays = 0;    // HFD: occlusion rays cast

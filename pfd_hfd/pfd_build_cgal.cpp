@@ -168,8 +168,15 @@ int cornerSign(const Line& l, const Corner& k, Counters& counters) {
 
 constexpr int kCross = 2;
 
-// PfdOptions::search_lines is capped here: the search's memo has 4^lines entries.
+// PfdOptions::search_lines is capped here: the search's memo has 3^lines entries (13 bytes each:
+// 6.9 MB at 12 lines).
 constexpr uint32_t kMaxSearchLines = 12;
+
+// tests_optimal needs the tree's exact mean tests and the search's prediction to agree this closely
+// (relative): both sum the same leaves' areas in doubles by different clips (~1e-15 each), while a
+// leaf tested once more or less than the model says differs by its area fraction (a sliver trimmed
+// off, 1e-9 of the extent, or far more).
+constexpr double kOptimalAgreement = 1e-9;
 
 // Slivers narrower than this × the region's extent are trimmed off regions (trimSlivers).
 constexpr double kSliverTolerance = 1e-9;
@@ -184,7 +191,10 @@ double regionExtent(std::span<const Piece> pieces) {
 
 // Which side of l the pieces lie on by less than `tol` only (a sliver cut off by rounded plane
 // coefficients, trimSlivers): +1 front, -1 back; 0 for none, a real crossing, or a sliver on both.
-int sliverSide(std::span<const Piece> pieces, const Line& l, double tol) {
+// `crossing`: l is known to cross the pieces exactly, so a side whose corners all evaluate to 0 or
+// less in doubles is a sliver too (narrower than the rounding: freedoom2 MAP29 level 12 tested
+// such a line for a leaf of area 0 in double, 3 nodes of its 7).
+int sliverSide(std::span<const Piece> pieces, const Line& l, double tol, bool crossing = false) {
   if (l.constant) return 0;
   double hi = 0.0, lo = 0.0;
   for (const Piece& p : pieces) {
@@ -195,7 +205,7 @@ int sliverSide(std::span<const Piece> pieces, const Line& l, double tol) {
     }
   }
   const double reach = tol * std::hypot(l.a, l.b);  // tol in units of the line's value
-  const bool front = hi > 0.0 && hi < reach, back = lo < 0.0 && -lo < reach;
+  const bool front = (hi > 0.0 || crossing) && hi < reach, back = (lo < 0.0 || crossing) && -lo < reach;
   return front == back ? 0 : front ? 1 : -1;
 }
 
@@ -1012,10 +1022,10 @@ class Builder {
   // ---- Exhaustive choice on small regions (PfdOptions::search_lines) ----
   // In double precision: it only decides WHICH crossing line to test next; every classification
   // the tree relies on stays exact. A line counts as crossing a double region where it leaves a
-  // vertex strictly on each side. No tolerance: a line that cuts off only a sliver (of no area in
-  // double) must still be tested wherever it crosses, at the cost of every eye of the region it is
-  // tested in, and the search must see that to put it low in the tree; a touching line that
-  // rounding shows as crossing only makes the estimate pessimistic.
+  // vertex strictly on each side, except where one side is a sliver the build trims instead of
+  // testing (crossesD), so that the model costs the tree the build makes; where the two still
+  // differ (a touching line that rounding shows as crossing, a sliver's area) the tree's exact mean
+  // tests differs from the prediction and tests_optimal stays false.
   // Convex pieces stored flat (piece k: pts[start[k], start[k + 1])), so that clearing one keeps
   // its memory: a search clips thousands of times and allocates nothing once warm.
   struct DRegion {
@@ -1030,14 +1040,19 @@ class Builder {
 
   static double lineValue(const Line& l, const glm::dvec2& p) { return l.a * p.x + l.b * p.y + l.c; }
 
-  static bool crossesD(const DRegion& r, const Line& l) {
-    bool pos = false, neg = false;
+  // A line that reaches less than sliver_tol_ into one side only counts as not crossing: the build
+  // trims that sliver off instead of testing the line (trimSliver), and the model must cost it so.
+  bool crossesD(const DRegion& r, const Line& l) const {
+    double hi = 0.0, lo = 0.0;
     for (const glm::dvec2& p : r.pts) {
       const double v = lineValue(l, p);
-      pos |= v > 0.0;
-      neg |= v < 0.0;
+      hi = std::max(hi, v);
+      lo = std::min(lo, v);
     }
-    return pos && neg;
+    if (!(hi > 0.0 && lo < 0.0)) return false;
+    if (!options_.trim_slivers) return true;
+    const double reach = sliver_tol_ * std::hypot(l.a, l.b);
+    return (hi < reach) == (-lo < reach);
   }
 
   static double areaD(const DRegion& r) {
@@ -1083,13 +1098,18 @@ class Builder {
   }
 
   // Per tree, reused by every search: clip scratch per recursion depth and a memo over the decision
-  // codes (2 bits per line, < 4^search_lines), valid where its stamp is the current search's.
+  // codes (a base-3 digit per line: 0 untested, 1 front, 2 back; < 3^search_lines), valid where its
+  // stamp is the current search's. `choice` keeps each code's best line, so that a completed search
+  // also gives the choice for every region below it (the plan, Builder::plan_).
   struct SearchScratch {
     std::vector<std::pair<DRegion, DRegion>> depth;  // front, back at each depth
     std::vector<double> memo;
+    std::vector<int8_t> choice;  // position of the best line to test first; -1: no line crosses
     std::vector<uint32_t> stamp;
     uint32_t search = 0;
   };
+  static constexpr uint32_t kPow3[kMaxSearchLines + 1] = {1,     3,      9,      27,      81,      243,    729,
+                                                          2187,  6561,   19683,  59049,   177147,  531441};
   SearchScratch search_scratch_;
 
   struct SearchState {
@@ -1099,14 +1119,19 @@ class Builder {
   };
 
   // The least Σ over leaves of area × tests for the region r (area `area`), whose still-crossing
-  // candidates are the set bits of `mask`; `code` holds 2 bits per candidate position (1 front,
-  // 2 back) of the tests on the way here, `level` how many. *choice: the position to test first
-  // (if wanted).
-  double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, uint32_t level, SearchState& st,
-                     int* choice) {
-    if (mask == 0 || st.work > st.limit) return 0.0;  // over the budget: the caller drops the result
+  // candidates are the set bits of `mask`; `code` holds a base-3 digit per candidate position (1
+  // front, 2 back) of the tests on the way here, `level` how many. Memoised with the best first
+  // position per code (SearchScratch::choice).
+  double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, uint32_t level, SearchState& st) {
     SearchScratch& sc = search_scratch_;
-    if (!choice && sc.stamp[code] == sc.search) return sc.memo[code];
+    if (mask == 0) {  // a leaf of the model: recorded, so that a plan can tell it from a missing code
+      sc.memo[code] = 0.0;
+      sc.choice[code] = -1;
+      sc.stamp[code] = sc.search;
+      return 0.0;
+    }
+    if (st.work > st.limit) return 0.0;  // over the budget: the caller drops the result
+    if (sc.stamp[code] == sc.search) return sc.memo[code];
     const std::vector<uint32_t>& lines = *st.lines;
     double best = INFINITY;
     int best_i = -1;
@@ -1126,40 +1151,95 @@ class Builder {
         if (crossesD(back, lj)) bm |= 1u << j;
       }
       // The front side's search reuses deeper scratch only, so `back` is intact for its own.
-      const double v = searchTests(front, af, fm, code | (1u << (2 * i)), level + 1, st, nullptr) +
-                       searchTests(back, ab, bm, code | (2u << (2 * i)), level + 1, st, nullptr);
+      const double v = searchTests(front, af, fm, code + kPow3[i], level + 1, st) +
+                       searchTests(back, ab, bm, code + 2 * kPow3[i], level + 1, st);
       if (v < best) {
         best = v;
         best_i = i;
       }
     }
     const double result = best_i < 0 ? area : area + best;
-    if (choice) {
-      *choice = best_i;
-    } else {
-      sc.memo[code] = result;
-      sc.stamp[code] = sc.search;
-    }
+    sc.memo[code] = result;
+    sc.choice[code] = static_cast<int8_t>(best_i);
+    sc.stamp[code] = sc.search;
     return result;
   }
 
+  // A completed search knows the best test order for the whole subtree below the node it was made
+  // at (its memo holds the best line of every region it reached): the nodes below follow it instead
+  // of searching again, as long as the exact build stays inside its double model.
+  struct Plan {
+    bool active = false;
+    int32_t owner = -1;           // the node it was made at
+    size_t path_start = 0;        // path_lines_.size() at that node
+    uint32_t stamp = 0;           // the search whose memo it reads
+    std::vector<uint32_t> lines;  // the search's lines, by position
+  };
+  Plan plan_;
+
+ public:
+  // The root's search (the first node that tests a line): whether it completed and its plan was
+  // followed to every leaf, and what it predicted (Σ area × tests, over the model's area).
+  bool root_planned = false;
+  bool root_plan_left = false;  // the exact build left the model somewhere below the root
+  double root_cost = 0.0, root_area = 0.0;
+  double leaf_depth_area = 0.0;  // Σ over leaves of area × tests on the leaf's path
+
+ private:
+  void leavePlan() {
+    if (plan_.owner == 0) root_plan_left = true;
+    plan_.active = false;
+  }
+
+  // The planned line for the current node (it crosses r exactly), or UINT32_MAX where the plan does
+  // not know the region: a line it did not see was tested, the model has no line crossing there, or
+  // its line does not cross r exactly. The plan then ends.
+  uint32_t planLine(const Region& r) {
+    const SearchScratch& sc = search_scratch_;
+    uint32_t code = 0;
+    for (size_t k = plan_.path_start; k < path_lines_.size(); ++k) {
+      size_t pos = 0;
+      while (pos < plan_.lines.size() && lines_[plan_.lines[pos]].canon != path_lines_[k]) ++pos;
+      if (pos == plan_.lines.size()) {
+        leavePlan();
+        return UINT32_MAX;
+      }
+      code += kPow3[pos] * (path_sides_[k] > 0 ? 1 : 2);
+    }
+    if (sc.search != plan_.stamp || sc.stamp[code] != plan_.stamp || sc.choice[code] < 0) {
+      leavePlan();
+      return UINT32_MAX;
+    }
+    const uint32_t line = plan_.lines[static_cast<size_t>(sc.choice[code])];
+    if (side(line, r) == kCross) return line;
+    leavePlan();
+    return UINT32_MAX;
+  }
+
   // The line to test first among `cands` (all the lines still to be tested in r) by exhaustive
-  // search, or UINT32_MAX when the search does not apply or its budget is spent.
-  uint32_t searchLine(const std::vector<uint32_t>& cands, const Region& r) {
-    if (options_.search_lines == 0 || cands.size() < 2 || search_work_ >= options_.search_work) return UINT32_MAX;
+  // search, or UINT32_MAX when the search does not apply or its budget is spent. A completed search
+  // becomes the plan of the subtree below `node`. At the root (node 0) the search has its own
+  // limits (PfdOptions::root_search_lines, root_search_work) and does not spend the tree's.
+  uint32_t searchLine(const std::vector<uint32_t>& cands, const Region& r, int32_t node) {
+    const bool root = node == 0;
+    if (options_.search_lines == 0 || cands.empty() || (!root && search_work_ >= options_.search_work))
+      return UINT32_MAX;
+    const uint32_t max_lines =
+        std::min(root ? std::max(options_.search_lines, options_.root_search_lines) : options_.search_lines,
+                 kMaxSearchLines);
     // One line per canonical plane: two BSP nodes on one plane are one test.
     std::vector<uint32_t> lines;
     for (uint32_t id : cands) {
       bool dup = false;
       for (uint32_t o : lines) dup |= lines_[o].canon == lines_[id].canon;
       if (!dup) lines.push_back(id);
-      if (lines.size() > options_.search_lines || lines.size() > kMaxSearchLines) return UINT32_MAX;
+      if (lines.size() > max_lines) return UINT32_MAX;
     }
-    if (lines.size() < 2) return UINT32_MAX;
     SearchScratch& sc = search_scratch_;
-    const size_t codes = size_t{1} << (2 * lines.size());
+    const size_t codes = kPow3[lines.size()];
     if (sc.memo.size() < codes) {
       sc.memo.resize(codes);
+      sc.choice.resize(codes);
       sc.stamp.resize(codes, 0);
     }
     if (sc.depth.size() < lines.size() + 1) sc.depth.resize(lines.size() + 1);
@@ -1174,28 +1254,101 @@ class Builder {
     }
     SearchState st;
     st.lines = &lines;
-    st.limit = options_.search_work - search_work_;
+    st.limit = root ? std::max(options_.root_search_work, options_.search_work) : options_.search_work - search_work_;
     uint32_t mask = 0;
     for (size_t i = 0; i < lines.size(); ++i)
       if (crossesD(dr, lines_[lines[i]])) mask |= 1u << i;
-    int choice = -1;
-    searchTests(dr, areaD(dr), mask, 0, 0, st, &choice);
-    search_work_ += st.work;
+    const double area = areaD(dr);
+    const double cost = searchTests(dr, area, mask, 0, 0, st);
+    if (!root) search_work_ += st.work;
     if (st.work > st.limit) {  // given up: the budget is spent, the greedy choice from here on
-      search_work_ = options_.search_work;
+      if (!root) search_work_ = options_.search_work;
       return UINT32_MAX;
     }
-    return choice < 0 ? UINT32_MAX : lines[static_cast<size_t>(choice)];
+    const int choice = sc.choice[0];
+    if (choice < 0) return UINT32_MAX;
+    plan_.active = true;
+    plan_.owner = node;
+    plan_.path_start = path_lines_.size();
+    plan_.stamp = sc.search;
+    plan_.lines = std::move(lines);
+    if (node == 0) {
+      root_planned = true;
+      root_cost = cost;
+      root_area = area;
+    }
+    return plan_.lines[static_cast<size_t>(choice)];
   }
 
-  uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r) {
-    const Candidates found = candidates(first, stack, r);
+  // Which pieces of r lie on the positive side of l, one bit each, where l cuts none of them (at
+  // most 64 pieces); nullopt where it cuts one.
+  std::optional<uint64_t> pieceSides(const Line& l, const Region& r) {
+    if (r.size() > 64) return std::nullopt;
+    uint64_t bits = 0;
+    for (size_t k = 0; k < r.size(); ++k) {
+      bool pos = false, neg = false;
+      for (const Corner& c : r[k].corners) {
+        const int sg = cornerSign(l, c, counters);
+        pos |= sg > 0;
+        neg |= sg < 0;
+      }
+      if (pos && neg) return std::nullopt;
+      if (pos) bits |= uint64_t{1} << k;
+    }
+    return bits;
+  }
+
+  // At the root the lines still to be tested are among the varying lines (those crossing the
+  // tree's whole region) that still cross r other than in a sliver (trimSliver trims those
+  // instead): where they are few, all of them, one per plane. A line that cuts no piece of r only
+  // separates its pieces, and every line that separates them the same way is decided with it: one
+  // of those stands for all (freedoom2 MAP27 level 23: 919 lines cross its two pieces, 19 nodes).
+  // The traversal's walk (candidates()) stops at a bound on the nodes it examines and the lines it
+  // keeps, which such lines fill, and kept these trees from their root search.
+  Candidates rootCandidates(uint32_t first, const Region& r) {
+    Candidates out;
+    if (hfd() || !options_.deep_candidates || options_.heuristic != PfdHeuristic::kBalanced ||
+        options_.search_lines == 0)
+      return out;
+    std::vector<uint64_t> separations;
+    // Whether `id` (a line crossing r exactly) is kept: not a plane already kept, not a separation
+    // of the pieces already kept.
+    auto keep = [&](uint32_t id) {
+      for (uint32_t o : out.lines)
+        if (lines_[o].canon == lines_[id].canon) return false;
+      const std::optional<uint64_t> sides = pieceSides(lines_[id], r);
+      if (sides) {
+        if (std::find(separations.begin(), separations.end(), *sides) != separations.end()) return false;
+        separations.push_back(*sides);
+      }
+      return true;
+    };
+    if (keep(first)) out.lines.push_back(first);
+    for (uint32_t id = 0; id < lines_.size(); ++id) {
+      if (!varying_[id] || id == first) continue;
+      if (options_.trim_slivers && sliverSide(r, lines_[id], sliver_tol_, true) != 0) continue;  // if it crosses
+      if (side(id, r) != kCross || !keep(id)) continue;
+      out.lines.push_back(id);
+      if (out.lines.size() > kMaxRootCandidates) return Candidates{};
+    }
+    out.complete = true;
+    return out;
+  }
+  static constexpr size_t kMaxRootCandidates = 64;  // a root search takes at most 12 distinct lines
+
+  uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r, int32_t node) {
+    if (plan_.active) {
+      const uint32_t planned = planLine(r);
+      if (planned != UINT32_MAX) return planned;
+    }
+    Candidates found = node == 0 ? rootCandidates(first, r) : Candidates{};
+    if (!found.complete) found = candidates(first, stack, r);
     const std::vector<uint32_t>& cands = found.lines;
-    if (cands.size() == 1) return first;
     if (found.complete) {  // never under HFD: its candidates stop at the frontier
-      const uint32_t searched = searchLine(cands, r);
+      const uint32_t searched = searchLine(cands, r, node);
       if (searched != UINT32_MAX) return searched;
     }
+    if (cands.size() == 1) return first;
     double total = 0.0;
     for (const Piece& p : r) total += pieceArea(p);
     uint32_t best = first;
@@ -1219,7 +1372,7 @@ class Builder {
   bool trimSliver(Region& r, uint32_t id) {
     if (!options_.trim_slivers) return false;
     const Line& l = lines_[id];
-    const int sliver = sliverSide(r, l, sliver_tol_);
+    const int sliver = sliverSide(r, l, sliver_tol_, true);  // called for crossing lines only
     if (sliver == 0) return false;
     Region front, back;
     clipRegion(r, l, counters, &front, &back);
@@ -1231,6 +1384,7 @@ class Builder {
   }
 
   std::vector<uint32_t> path_lines_;  // canonical ids of the lines tested on the way to this node
+  std::vector<int8_t> path_sides_;    // and the side taken after each (+1 front, -1 back)
   uint64_t search_work_ = 0;      // clips made by searchLine in this tree
   double sliver_tol_ = 0.0;       // kSliverTolerance × the root region's extent
   static constexpr uint32_t kMaxTrimsPerNode = 64;  // a guard: each trim removes a line's crossing
@@ -1330,9 +1484,10 @@ class Builder {
         bounding += on_edge;
       }
       leaf_bound_tests += area * bounding;
+      leaf_depth_area += area * static_cast<double>(path_lines_.size());
       return index;
     }
-    const uint32_t line = chooseLine(crossing, stack, r);
+    const uint32_t line = chooseLine(crossing, stack, r, index);
     Region front, back;
     clipRegion(r, lines_[line], counters, &front, &back);
     r.clear();
@@ -1341,13 +1496,17 @@ class Builder {
     side_[line] = 1;
     log_.push_back(line);
     path_lines_.push_back(lines_[line].canon);
+    path_sides_.push_back(1);
     const int32_t f = build(std::move(front), stack, depth + 1);
     undo(mark, hidden_mark);
     side_[line] = -1;
     log_.push_back(line);
+    path_sides_.back() = -1;
     const int32_t b = build(std::move(back), std::move(stack), depth + 1);
     undo(mark, hidden_mark);
     path_lines_.pop_back();
+    path_sides_.pop_back();
+    if (plan_.active && plan_.owner == index) plan_.active = false;
     out_.nodes[index].plane = testPlaneIndex(line);
     out_.nodes[index].front = f;
     out_.nodes[index].back = b;
@@ -1546,6 +1705,18 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.tests_entropy_bound = entropy;
   s.tests_huffman_bound = huffmanMeanDepth(builder.leaf_areas);
   s.tests_cell_bound = s.region_area > 0.0 ? builder.leaf_bound_tests / s.region_area : 0.0;
+  s.tests_area_mean = s.region_area > 0.0 ? builder.leaf_depth_area / s.region_area : 0.0;
+  if (builder.root_planned && builder.root_area > 0.0) {
+    s.tests_search_mean = builder.root_cost / builder.root_area;
+    // The plan reached every leaf, and the exact tree costs what the double model said: then no
+    // tree over these lines does better (the search's minimum), up to the model's rounding.
+    s.tests_optimal = !builder.root_plan_left &&
+                      std::abs(s.tests_area_mean - s.tests_search_mean) <= kOptimalAgreement * std::max(1.0, s.tests_area_mean);
+  }
+  // A tree that meets a lower bound of every tree (no test at all, or Huffman's, or the cells') is
+  // optimal whatever chose its tests.
+  const double bound = std::max(s.tests_huffman_bound, s.tests_cell_bound);
+  if (tree.nodes.size() == 1 || s.tests_area_mean <= bound * (1.0 + kOptimalAgreement)) s.tests_optimal = true;
   tree.nodes.shrink_to_fit();
   tree.run_refs.shrink_to_fit();
   tree.runs.shrink_to_fit();

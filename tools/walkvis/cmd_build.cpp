@@ -32,6 +32,8 @@ struct BuildArgs {
   bool no_dedup = false;
   uint32_t share_min = PfdOptions{}.share_min;
   uint32_t stat_eyes = 10000;
+  uint32_t search_lines = PfdOptions{}.search_lines;
+  uint64_t search_work = PfdOptions{}.search_work;
   bool json = false;
 };
 
@@ -137,6 +139,8 @@ int runBuild(const BuildArgs& args) {
   options.tree.dedup = !args.no_dedup;
   options.tree.share_min = args.share_min;
   options.tree.stat_eyes = args.stat_eyes;
+  options.tree.search_lines = args.search_lines;
+  options.tree.search_work = args.search_work;
 
   auto progress = [](const std::string& line) {
     std::fprintf(stderr, "%s\n", line.c_str());
@@ -202,6 +206,8 @@ int runBuild(const BuildArgs& args) {
   j["heuristic"] = args.heuristic;
   j["dedup"] = !args.no_dedup;
   j["share_min"] = args.share_min;
+  j["search_lines"] = args.search_lines;
+  j["search_work"] = args.search_work;
   j["total_bytes"] = used;
   uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0;
   auto trees = nlohmann::ordered_json::array();
@@ -230,6 +236,9 @@ int runBuild(const BuildArgs& args) {
       e["tests_entropy_bound"] = s.tests_entropy_bound;
       e["tests_huffman_bound"] = s.tests_huffman_bound;
       e["tests_cell_bound"] = s.tests_cell_bound;
+      e["tests_area_mean"] = s.tests_area_mean;
+      e["tests_search_mean"] = s.tests_search_mean;
+      e["tests_optimal"] = s.tests_optimal;
       e["nodes"] = s.nodes;
       e["list_entries"] = s.list_entries;
       e["list_fragments"] = s.list_fragments;
@@ -343,6 +352,10 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                   "Orders of at least this many ids are stored as sequences of their sub-orders (less memory, more "
                   "runs per query); 4294967295: flat runs only");
   sub->add_option("--stat-eyes", args->stat_eyes, "Random eyes per tree for tests_mean / tests_max");
+  sub->add_option("--search-lines", args->search_lines,
+                  "pfd: exhaustive choice of the next test where at most this many lines remain (0: off; capped "
+                  "at 12)");
+  sub->add_option("--search-work", args->search_work, "pfd: clips one tree may spend on exhaustive choices");
   sub->add_flag("--json", args->json, "Print one JSON object");
   sub->callback([args, &runner] { runner = [args] { return runBuild(*args); }; });
 }

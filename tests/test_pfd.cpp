@@ -462,20 +462,35 @@ TEST(Pfd, HfdDropsClosedRoom) {
 // tests: same leaves, orders equal the BSP's, and on trees small enough to be searched at every
 // node no more tests than the greedy split (summed, strictly fewer). 1% slack per tree: the search
 // minimises area-weighted tests on double regions; tests_mean samples 10,000 eyes.
+// A small random building, its BSP and its ground level's eye height.
+struct SmallLevel {
+  Scene scene;
+  BspTree bsp;
+  double height = 0.0;
+  PfdTree build(const PfdOptions& options) const {
+    return buildPfd(bsp, scene.levels[0].walkable, height, std::nullopt, options);
+  }
+};
+SmallLevel smallLevel(uint64_t seed) {
+  SmallLevel s;
+  s.scene = randomBuilding(seed, 6, 1.5);
+  s.bsp = buildBsp(s.scene);
+  s.height = s.scene.levels[0].floor_y + s.scene.eye_height;
+  return s;
+}
+
 TEST(Pfd, SearchedSmallTreesNoMoreTests) {
   double searched = 0.0, greedy = 0.0;
   int trees = 0;
   for (uint64_t seed = 1; seed <= 12; ++seed) {
-    const Scene scene = randomBuilding(seed, 6, 1.5);
-    const BspTree bsp = buildBsp(scene);
-    const FloorLevel& level = scene.levels[0];
-    const double height = level.floor_y + scene.eye_height;
+    const SmallLevel small = smallLevel(seed);
+    const BspTree& bsp = small.bsp;
     PfdOptions off;
     off.search_lines = 0;
     const PfdOptions on;
     ASSERT_GT(on.search_lines, 0u);
-    const PfdTree a = buildPfd(bsp, level.walkable, height, std::nullopt, off);
-    const PfdTree b = buildPfd(bsp, level.walkable, height, std::nullopt, on);
+    const PfdTree a = small.build(off);
+    const PfdTree b = small.build(on);
     SCOPED_TRACE("seed " + std::to_string(seed));
     EXPECT_EQ(a.stats.leaves, b.stats.leaves);
     EXPECT_LE(b.stats.tests_mean, 1.01 * a.stats.tests_mean);
@@ -496,17 +511,15 @@ TEST(Pfd, SearchedSmallTreesNoMoreTests) {
 TEST(Pfd, RootSearchFlagsOptimalTrees) {
   int flagged = 0, cheaper = 0;
   for (uint64_t seed = 1; seed <= 12; ++seed) {
-    const Scene scene = randomBuilding(seed, 6, 1.5);
-    const BspTree bsp = buildBsp(scene);
-    const FloorLevel& level = scene.levels[0];
-    const double height = level.floor_y + scene.eye_height;
+    const SmallLevel small = smallLevel(seed);
+    const BspTree& bsp = small.bsp;
     PfdOptions greedy_options;
     greedy_options.search_lines = 0;
     PfdOptions node_options;
     node_options.root_search_lines = 0;
-    const PfdTree root = buildPfd(bsp, level.walkable, height, std::nullopt, PfdOptions{});
-    const PfdTree greedy = buildPfd(bsp, level.walkable, height, std::nullopt, greedy_options);
-    const PfdTree node = buildPfd(bsp, level.walkable, height, std::nullopt, node_options);
+    const PfdTree root = small.build(PfdOptions{});
+    const PfdTree greedy = small.build(greedy_options);
+    const PfdTree node = small.build(node_options);
     SCOPED_TRACE("seed " + std::to_string(seed));
     EXPECT_FALSE(greedy.stats.tests_optimal && greedy.stats.leaves > 1);  // no search, no flag
     EXPECT_EQ(root.stats.leaves, greedy.stats.leaves);

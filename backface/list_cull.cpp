@@ -312,37 +312,51 @@ uint32_t* viewMaskRuns(const uint32_t* idx, const Code* code, const uint8_t* fla
 }
 
 #ifdef WALKVIS_LIST_CULL_X86
+// Sixteen positions from `at` of viewMaskRunsVbmi, the first `count` (0..16) of them real.
+template <uint32_t kCodes>
+[[gnu::target("avx512f,avx512bw,avx512vl,avx512vbmi,popcnt,bmi2"), gnu::always_inline]] inline uint32_t* viewMaskStep(
+    const uint32_t* idx, const uint8_t* code, __m512i t0, __m512i t1, __m512i t2, __m512i t3, uint32_t at,
+    uint32_t count, uint32_t* dst) {
+  const __mmask16 lanes = static_cast<__mmask16>(_bzhi_u32(0xFFFFu, count));
+  const __m512i c = _mm512_zextsi128_si512(_mm_maskz_loadu_epi8(lanes, code + at));
+  __m512i f;
+  if constexpr (kCodes <= 64) {
+    (void)t1, (void)t2, (void)t3;
+    f = _mm512_maskz_permutexvar_epi8(~__mmask64{0}, c, t0);  // GCC 12 warns on the unmasked form
+  } else if constexpr (kCodes <= 128) {
+    (void)t2, (void)t3;
+    f = _mm512_permutex2var_epi8(t0, c, t1);
+  } else {
+    f = _mm512_mask_blend_epi8(_mm512_movepi8_mask(c), _mm512_permutex2var_epi8(t0, c, t1),
+                               _mm512_permutex2var_epi8(t2, c, t3));
+  }
+  const __mmask16 keep = static_cast<__mmask16>(lanes & ~static_cast<uint32_t>(_mm512_test_epi8_mask(f, f)));
+  const __m512i id = _mm512_maskz_loadu_epi32(lanes, idx + at);
+  _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(keep, id));
+  return dst + _mm_popcnt_u32(keep);
+}
+
 // The same with AVX-512 VBMI, sixteen positions per step (masked loads: nothing is read past a
 // run; the full 16-lane store may write kListCullOutSlack entries past the survivors). `flags`:
 // 256 entries (codes past the culler's are 0); kCodes (64, 128 or 256) bounds the culler's codes:
 // one vpermb, one vpermi2b, or two and a blend on the top bit.
 template <uint32_t kCodes>
-[[gnu::target("avx512f,avx512bw,avx512vl,avx512vbmi,popcnt")]] uint32_t* viewMaskRunsVbmi(
+[[gnu::target("avx512f,avx512bw,avx512vl,avx512vbmi,popcnt,bmi2")]] uint32_t* viewMaskRunsVbmi(
     const uint32_t* idx, const uint8_t* code, const uint8_t* flags, const IndexRange* spans, const uint32_t* ids,
     size_t n, uint32_t* dst) {
   const __m512i t0 = _mm512_loadu_si512(flags), t1 = _mm512_loadu_si512(flags + 64);
   const __m512i t2 = _mm512_loadu_si512(flags + 128), t3 = _mm512_loadu_si512(flags + 192);
   for (size_t k = 0; k < n; ++k) {
     const IndexRange s = spans[ids[k]];
-    uint32_t at = s.first, left = s.count;
-    while (left > 0) {
-      const __mmask16 lanes = left >= 16 ? __mmask16(0xFFFF) : static_cast<__mmask16>((1u << left) - 1u);
-      const __m512i c = _mm512_zextsi128_si512(_mm_maskz_loadu_epi8(lanes, code + at));
-      __m512i f;
-      if constexpr (kCodes <= 64) {
-        f = _mm512_maskz_permutexvar_epi8(~__mmask64{0}, c, t0);  // GCC 12 warns on the unmasked form
-      } else if constexpr (kCodes <= 128) {
-        f = _mm512_permutex2var_epi8(t0, c, t1);
-      } else {
-        f = _mm512_mask_blend_epi8(_mm512_movepi8_mask(c), _mm512_permutex2var_epi8(t0, c, t1),
-                                   _mm512_permutex2var_epi8(t2, c, t3));
-      }
-      const __mmask16 keep = static_cast<__mmask16>(lanes & ~static_cast<uint32_t>(_mm512_test_epi8_mask(f, f)));
-      const __m512i id = _mm512_maskz_loadu_epi32(lanes, idx + at);
-      _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(keep, id));
-      dst += _mm_popcnt_u32(keep);
-      at += 16;
-      left = left > 16 ? left - 16 : 0;
+    // Most runs are at most 32 positions: two steps without a branch on the count (the second may
+    // have no lanes), which a loop's exit would mispredict from run to run.
+    dst = viewMaskStep<kCodes>(idx, code, t0, t1, t2, t3, s.first, std::min(s.count, 16u), dst);
+    dst = viewMaskStep<kCodes>(idx, code, t0, t1, t2, t3, s.first + 16, s.count > 16 ? std::min(s.count - 16, 16u) : 0u, dst);
+    for (uint32_t at = s.first + 32, left = s.count > 32 ? s.count - 32 : 0; left > 0;) {
+      const uint32_t count = std::min(left, 16u);
+      dst = viewMaskStep<kCodes>(idx, code, t0, t1, t2, t3, at, count, dst);
+      at += count;
+      left -= count;
     }
   }
   return dst;
@@ -712,7 +726,8 @@ void ListCuller::Impl::buildViewMask(const BackfaceInput& input, std::span<const
   }
 #ifdef WALKVIS_LIST_CULL_X86
   vbmi = codes <= kMaxByteCodes && options.simd == BackfaceSimd::kAuto && path == PlanePath::kAvx512 &&
-         __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi");
+         __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi") &&
+         __builtin_cpu_supports("bmi2");
 #endif
   table_positions = n;
   bytes = n * (code8.empty() ? sizeof(uint16_t) : sizeof(uint8_t)) + 12 * uint64_t{code_stride} * sizeof(float);

@@ -353,9 +353,11 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                   "runs per query); 4294967295: flat runs only");
   sub->add_option("--stat-eyes", args->stat_eyes, "Random eyes per tree for tests_mean / tests_max");
   sub->add_option("--search-lines", args->search_lines,
-                  "pfd: exhaustive choice of the next test where at most this many lines remain (0: off; capped "
-                  "at 12)");
-  sub->add_option("--search-work", args->search_work, "pfd: clips one tree may spend on exhaustive choices");
+                  "pfd: exhaustive choice of the next test where at most this many lines remain (0: off; at most "
+                  "12: the search's memo has 3^lines entries)")
+      ->check(CLI::Range(0u, 12u));
+  sub->add_option("--search-work", args->search_work, "pfd: clips one tree may spend on exhaustive choices")
+      ->check(CLI::Range(uint64_t{0}, uint64_t{1} << 40));
   sub->add_flag("--json", args->json, "Print one JSON object");
   sub->callback([args, &runner] { runner = [args] { return runBuild(*args); }; });
 }

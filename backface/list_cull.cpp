@@ -86,8 +86,8 @@ struct MaskChunk {
   bool planes = false;   // too small for a table: the plane test (planes of Impl::nx.. at its positions)
 };
 
+// Per range, besides its IndexRange (Impl::spans).
 struct RangeState {
-  uint32_t first = 0, count = 0;
   uint32_t chunk_begin = 0, chunk_end = 0;  // mask: chunks of this range
   std::unique_ptr<BackfaceCuller> culler;   // cluster, hierarchy
   uint32_t unit_of = 0;                     // cluster, hierarchy: offset into Impl::unit_of
@@ -170,6 +170,22 @@ uint32_t* copyRuns(const uint32_t* idx, const IndexRange* spans, const uint32_t*
   return dst;
 }
 
+// Appends idx[i] for every position i of the runs ids[0, n) of `spans` with keep(i), in order,
+// through the raw cursor `dst` without a branch per element; returns the cursor after them. Every
+// scalar pass below is this with its own test.
+template <typename Keep>
+uint32_t* appendKept(const uint32_t* idx, const IndexRange* spans, const uint32_t* ids, size_t n, uint32_t* dst,
+                     Keep keep) {
+  for (size_t k = 0; k < n; ++k) {
+    const IndexRange s = spans[ids[k]];
+    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
+      *dst = idx[i];
+      dst += keep(i) ? 1 : 0;
+    }
+  }
+  return dst;
+}
+
 // isFrontFacing() of plane p: the same expression as glm::dot, (x + y) + z (the baseline target
 // has no FMA to contract it into).
 inline bool planeFront(const PlaneArrays& a, uint32_t p, double ex, double ey, double ez) {
@@ -179,14 +195,8 @@ inline bool planeFront(const PlaneArrays& a, uint32_t p, double ex, double ey, d
 // The direct test: each listed position's plane, scalar.
 uint32_t* directRuns(const PlaneArrays& a, const IndexRange* spans, const uint32_t* ids, size_t n,
                      const glm::dvec3& eye, uint32_t* dst) {
-  for (size_t k = 0; k < n; ++k) {
-    const IndexRange s = spans[ids[k]];
-    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
-      *dst = a.idx[i];
-      dst += planeFront(a, a.poly_plane[a.idx[i]], eye.x, eye.y, eye.z) ? 1 : 0;
-    }
-  }
-  return dst;
+  return appendKept(a.idx, spans, ids, n, dst,
+                    [&](uint32_t i) { return planeFront(a, a.poly_plane[a.idx[i]], eye.x, eye.y, eye.z); });
 }
 
 // front[p] = 1 where plane p is front-facing, else 0, for p < a.planes.
@@ -199,15 +209,7 @@ void frontTableScalar(const PlaneArrays& a, const glm::dvec3& eye, uint8_t* fron
 // and 2.3x slower on Freedoom MAP01, Zen 5).
 uint32_t* tableRuns(const PlaneArrays& a, const uint8_t* front, const IndexRange* spans, const uint32_t* ids,
                     size_t n, uint32_t* dst) {
-  for (size_t k = 0; k < n; ++k) {
-    const IndexRange s = spans[ids[k]];
-    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
-      const uint32_t polygon = a.idx[i];
-      *dst = polygon;
-      dst += front[a.poly_plane[polygon]];
-    }
-  }
-  return dst;
+  return appendKept(a.idx, spans, ids, n, dst, [&](uint32_t i) { return front[a.poly_plane[a.idx[i]]] != 0; });
 }
 
 #ifdef WALKVIS_LIST_CULL_X86
@@ -301,14 +303,7 @@ void viewFlags(const float* cx, const float* cy, const float* cz, uint32_t strid
 template <typename Code>
 uint32_t* viewMaskRuns(const uint32_t* idx, const Code* code, const uint8_t* flags, const IndexRange* spans,
                        const uint32_t* ids, size_t n, uint32_t* dst) {
-  for (size_t k = 0; k < n; ++k) {
-    const IndexRange s = spans[ids[k]];
-    for (uint32_t i = s.first, end = s.first + s.count; i < end; ++i) {
-      *dst = idx[i];
-      dst += flags[code[i]] ^ 1u;
-    }
-  }
-  return dst;
+  return appendKept(idx, spans, ids, n, dst, [&](uint32_t i) { return flags[code[i]] == 0; });
 }
 
 #ifdef WALKVIS_LIST_CULL_X86
@@ -492,21 +487,6 @@ struct ListCuller::Impl {
   // `front`: the call's plane bytes for the plane-test chunks (frontTableFor; nullptr: direct).
   uint32_t* maskRange(const RangeState& rs, const glm::dvec3& eye, const uint8_t* front, NormalMaskGrid::Table& table,
                       uint32_t* dst) const;
-
-  // Appends indices[first + i] for every i with keep(i) true, without a branch per element.
-  template <typename Keep>
-  static uint32_t compact(const uint32_t* idx, uint32_t count, std::vector<uint32_t>& out, Keep keep) {
-    const size_t base = out.size();
-    out.resize(base + count);
-    uint32_t* dst = out.data() + base;
-    size_t k = 0;
-    for (uint32_t i = 0; i < count; ++i) {
-      dst[k] = idx[i];
-      k += keep(i) ? 1 : 0;
-    }
-    out.resize(base + k);
-    return count - static_cast<uint32_t>(k);
-  }
 };
 
 ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_t> indices,
@@ -540,10 +520,6 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
     }
   }
   impl->ranges.resize(ranges.size());
-  for (size_t r = 0; r < ranges.size(); ++r) {
-    impl->ranges[r].first = ranges[r].first;
-    impl->ranges[r].count = ranges[r].count;
-  }
   impl->spans.assign(ranges.begin(), ranges.end());
   impl->path = resolvePlanePath(options.simd);
   const size_t n = indices.size();
@@ -567,11 +543,13 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
       std::vector<uint8_t> plane_at(n, 0);
       uint64_t table_chunks = 0;
       impl->table_range.assign(impl->ranges.size(), 0);
-      for (RangeState& rs : impl->ranges) {
+      for (size_t r = 0; r < impl->ranges.size(); ++r) {
+        RangeState& rs = impl->ranges[r];
+        const IndexRange span = impl->spans[r];
         rs.chunk_begin = static_cast<uint32_t>(impl->chunks.size());
-        const uint32_t size = options.mask_group_size == 0 ? std::max<uint32_t>(rs.count, 1) : options.mask_group_size;
-        for (uint32_t at = 0; at < rs.count; at += size) {
-          const uint32_t begin = rs.first + at, end = rs.first + std::min(rs.count, at + size);
+        const uint32_t size = options.mask_group_size == 0 ? std::max<uint32_t>(span.count, 1) : options.mask_group_size;
+        for (uint32_t at = 0; at < span.count; at += size) {
+          const uint32_t begin = span.first + at, end = span.first + std::min(span.count, at + size);
           if (end - begin < options.mask_list_min_chunk) {
             MaskChunk c;
             c.begin = begin;
@@ -586,7 +564,7 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
         }
         rs.chunk_end = static_cast<uint32_t>(impl->chunks.size());
         for (uint32_t c = rs.chunk_begin; c < rs.chunk_end; ++c) {
-          if (!impl->chunks[c].planes) impl->table_range[static_cast<size_t>(&rs - impl->ranges.data())] = 1;
+          if (!impl->chunks[c].planes) impl->table_range[r] = 1;
         }
       }
       for (const MaskChunk& c : impl->chunks) impl->table_positions += c.planes ? 0 : c.end - c.begin;
@@ -618,14 +596,16 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
       std::vector<Polygon> local;
       std::vector<glm::dvec3> local_vertices;
       size_t max_units = 0;
-      for (RangeState& rs : impl->ranges) {
-        if (rs.count == 0) continue;
+      for (size_t r = 0; r < impl->ranges.size(); ++r) {
+        RangeState& rs = impl->ranges[r];
+        const IndexRange span = impl->spans[r];
+        if (span.count == 0) continue;
         // The range's polygons with their own vertices only (a method may scan its whole vertex
         // array, e.g. for a bounding box).
         local.clear();
         local_vertices.clear();
-        for (uint32_t i = 0; i < rs.count; ++i) {
-          Polygon poly = input.polygons[indices[rs.first + i]];
+        for (uint32_t i = 0; i < span.count; ++i) {
+          Polygon poly = input.polygons[indices[span.first + i]];
           const auto v = input.vertices.subspan(poly.first_vertex, poly.vertex_count);
           poly.first_vertex = static_cast<uint32_t>(local_vertices.size());
           local_vertices.insert(local_vertices.end(), v.begin(), v.end());
@@ -635,13 +615,13 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
         // unit_of: per position of the range, the unit holding its local polygon. Units of these
         // methods are disjoint and cover every polygon (checked: a polygon in no unit is kept).
         rs.unit_of = static_cast<uint32_t>(impl->unit_of.size());
-        impl->unit_of.resize(impl->unit_of.size() + rs.count, UINT32_MAX);
+        impl->unit_of.resize(impl->unit_of.size() + span.count, UINT32_MAX);
         const size_t units = rs.culler->unitCount();
         for (size_t u = 0; u < units; ++u) {
           for (uint32_t local_p : rs.culler->unitPolygons(u)) impl->unit_of[rs.unit_of + local_p] = static_cast<uint32_t>(u);
         }
         max_units = std::max(max_units, units + 1);
-        impl->bytes += rs.culler->stateBytes() + rs.count * sizeof(uint32_t);
+        impl->bytes += rs.culler->stateBytes() + span.count * sizeof(uint32_t);
       }
       // The extra flag at index max_units - 1 and beyond stays 0: a position in no unit maps to
       // units (the range's own count), whose flag cullRange clears.
@@ -683,12 +663,9 @@ uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& ey
       continue;
     }
     grid->backTable(axis, sin_theta, table);
-    const uint16_t* cl = cell.data() + chunk.begin;
-    const uint8_t* t = table.data();
-    for (uint32_t i = 0; i < count; ++i) {
-      *dst = idx[i];
-      dst += t[cl[i]] == 0 ? 1 : 0;
-    }
+    const IndexRange span{chunk.begin, count};
+    const uint32_t zero = 0;
+    dst = appendKept(indices.data(), &span, &zero, 1, dst, [&](uint32_t i) { return table[cell[i]] == 0; });
   }
   return dst;
 }
@@ -770,25 +747,6 @@ uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const Backf
     }
     total += m.spans[r].count;
   }
-  if (m.method == ListCullMethod::kCluster || m.method == ListCullMethod::kHierarchy) {
-    // The method's own culler per range (its clusters are per range): one call each.
-    uint32_t culled = 0;
-    for (uint32_t r : range_ids) {
-      const RangeState& rs = m.ranges[r];
-      if (rs.count == 0) continue;
-      const size_t units = rs.culler->unitCount();
-      std::span<uint8_t> flags(m.unit_flags.data(), units);
-      rs.culler->cull(view, flags);
-      m.unit_flags[units] = 0;  // positions in no unit map here
-      const uint32_t* unit_of = m.unit_of.data() + rs.unit_of;
-      const uint8_t* f = m.unit_flags.data();
-      culled += Impl::compact(m.indices.data() + rs.first, rs.count, out, [&](uint32_t i) {
-        const uint32_t u = unit_of[i];
-        return f[u < units ? u : units] == 0;
-      });
-    }
-    return culled;
-  }
   // One resize for the whole call (std::vector has no way to grow without value-initialising);
   // the kernels then write through a raw cursor and may run kListCullOutSlack entries ahead.
   const size_t base = out.size();
@@ -806,12 +764,12 @@ uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const Backf
       dst = planeTestRuns(m.path, m.arrays(), total, m.spans.data(), ids, n, view.eye, dst);
       break;
     case ListCullMethod::kMask: {
-      // The plane bytes once per call, for every chunk below mask_list_min_chunk (all of them
-      // where no chunk has a table).
       if (m.view_mask) {
         dst = m.viewMaskCall(view, ids, n, dst);
         break;
       }
+      // The plane bytes once per call, for every chunk below mask_list_min_chunk (all of them
+      // where no chunk has a table).
       FrontTable storage;
       const uint8_t* front = frontTableFor(m.path, m.arrays(), total, view.eye, storage);
       if (m.table_positions == 0) {
@@ -826,7 +784,23 @@ uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const Backf
       break;
     }
     case ListCullMethod::kCluster:
-    case ListCullMethod::kHierarchy: break;  // above
+    case ListCullMethod::kHierarchy:
+      // The method's own culler per range (its clusters are per range): one call each.
+      for (size_t k = 0; k < n; ++k) {
+        const RangeState& rs = m.ranges[ids[k]];
+        const IndexRange span = m.spans[ids[k]];
+        if (span.count == 0) continue;
+        const size_t units = rs.culler->unitCount();
+        rs.culler->cull(view, std::span<uint8_t>(m.unit_flags.data(), units));
+        m.unit_flags[units] = 0;  // positions in no unit map here
+        const uint32_t* unit_of = m.unit_of.data() + rs.unit_of;  // by position in the range
+        const uint8_t* f = m.unit_flags.data();
+        dst = appendKept(m.indices.data(), m.spans.data(), ids + k, 1, dst, [&](uint32_t i) {
+          const uint32_t u = unit_of[i - span.first];
+          return f[u < units ? u : units] == 0;
+        });
+      }
+      break;
   }
   const size_t kept = static_cast<size_t>(dst - start);
   out.resize(base + kept);

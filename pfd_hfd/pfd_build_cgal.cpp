@@ -189,6 +189,9 @@ double regionExtent(std::span<const Piece> pieces) {
   return extent;
 }
 
+// A distance `tol` in units of l's value (a·x + b·z + c): how far a sliver may reach past l.
+double sliverReach(const Line& l, double tol) { return tol * std::hypot(l.a, l.b); }
+
 // Which side of l the pieces lie on by less than `tol` only (a sliver cut off by rounded plane
 // coefficients, trimSlivers): +1 front, -1 back; 0 for none, a real crossing, or a sliver on both.
 // `crossing`: l is known to cross the pieces exactly, so a side whose corners all evaluate to 0 or
@@ -204,7 +207,7 @@ int sliverSide(std::span<const Piece> pieces, const Line& l, double tol, bool cr
       lo = std::min(lo, v);
     }
   }
-  const double reach = tol * std::hypot(l.a, l.b);  // tol in units of the line's value
+  const double reach = sliverReach(l, tol);
   const bool front = (hi > 0.0 || crossing) && hi < reach, back = (lo < 0.0 || crossing) && -lo < reach;
   return front == back ? 0 : front ? 1 : -1;
 }
@@ -1051,7 +1054,7 @@ class Builder {
     }
     if (!(hi > 0.0 && lo < 0.0)) return false;
     if (!options_.trim_slivers) return true;
-    const double reach = sliver_tol_ * std::hypot(l.a, l.b);
+    const double reach = sliverReach(l, sliver_tol_);
     return (hi < reach) == (-lo < reach);
   }
 
@@ -1612,7 +1615,7 @@ void trimSlivers(Region& region, const BspTree& bsp, double height, Counters& co
   for (const BspNode& node : bsp.nodes) {
     const Line l = planeLine(node.plane, height);
     if (l.constant) continue;
-    const double reach = tol * std::hypot(l.a, l.b);  // tol in units of the line's value
+    const double reach = sliverReach(l, tol);
     for (Piece& p : region) {
       // Box filter: most lines pass far from most pieces.
       const double xmin = l.a > 0 ? p.lox : p.hix, xmax = l.a > 0 ? p.hix : p.lox;

@@ -649,9 +649,9 @@ uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& ey
     const MaskChunk& chunk = chunks[c];
     const uint32_t* idx = indices.data() + chunk.begin;
     const uint32_t count = chunk.end - chunk.begin;
+    const IndexRange span{chunk.begin, count};  // the chunk as the one run of the passes below
+    const uint32_t zero = 0;
     if (chunk.planes) {
-      const IndexRange span{chunk.begin, count};
-      const uint32_t zero = 0;
       dst = planeRuns(path, arrays(), front, &span, &zero, 1, eye, dst);
       continue;
     }
@@ -663,8 +663,6 @@ uint32_t* ListCuller::Impl::maskRange(const RangeState& rs, const glm::dvec3& ey
       continue;
     }
     grid->backTable(axis, sin_theta, table);
-    const IndexRange span{chunk.begin, count};
-    const uint32_t zero = 0;
     dst = appendKept(indices.data(), &span, &zero, 1, dst, [&](uint32_t i) { return table[cell[i]] == 0; });
   }
   return dst;

@@ -41,6 +41,9 @@ enum class PfdHeuristic {
                // splits the region's area most evenly
 };
 
+// PfdOptions::search_lines and root_search_lines are capped at this many lines.
+constexpr uint32_t kPfdMaxSearchLines = 128;
+
 struct PfdOptions {
   PfdHeuristic heuristic = PfdHeuristic::kBalanced;
   // kBalanced: undecided lines examined per split (>= 1). Without HFD the leaves are the cells of
@@ -61,24 +64,25 @@ struct PfdOptions {
   // needless node: HFD keeps the frontier.
   bool deep_candidates = true;
   // kBalanced, PFD with deep_candidates: where the lines still to be tested in a region are at
-  // most this many, the next one is chosen by exhaustive search for the least area-weighted mean
-  // tests below (memoised over the decisions; in double precision, as it only picks which line to
-  // test: every classification stays exact). 0 = off. Small trees, whose few leaves are very
-  // unequal, are where the greedy even split is furthest from the optimum. search_work bounds the
-  // clips one tree may spend on it (then the greedy choice), so big trees pay a bounded amount.
-  uint32_t search_lines = 8;
-  uint64_t search_work = 200'000;
-  // With search_lines > 0: at the root the search also applies where up to this many lines cross
-  // the whole region (capped at 12), with its own budget of clips (not spent from search_work). A
-  // completed search's memo holds the best line for every region below it, which the nodes below
-  // then follow (no search of their own), so a tree whose root search completes is optimal among
-  // trees testing these lines (PfdStats::tests_optimal). Only trees of few lines (up to ~100 nodes)
-  // get there: big trees pay nothing. A 12-line search costs up to ~110k clips (freedoom2 MAP29), 2M
-  // bounds the worst case (~0.5 s). freedoom2, 16 maps with small trees above 1.3 × entropy (with
-  // the trimming of slivers thinner than rounding): such trees 46 -> 22, 7 of them now flagged
-  // optimal; MAP27 and MAP11 build times unchanged.
-  uint32_t root_search_lines = 12;
-  uint64_t root_search_work = 2'000'000;
+  // most this many, the whole order of the tests below it is chosen by an optimal search for the
+  // least area-weighted mean tests (pfd_search.h: branch and bound over the sets of leaves a region
+  // holds; in double precision, as it only picks which line to test: every classification stays
+  // exact). 0 = off, also at the root. Small trees, whose few leaves are very unequal, are where the
+  // greedy even split is furthest from the optimum. search_work bounds the work (CellSearch::work,
+  // ~8 ns a unit) one tree may spend on such searches (then the greedy choice), so big trees pay a
+  // bounded amount: 4M, ~30 ms.
+  uint32_t search_lines = 16;
+  uint64_t search_work = 4'000'000;
+  // With search_lines > 0: the root's search applies where up to this many lines cross the whole
+  // region (at most kPfdMaxSearchLines), with its own budget (not spent from search_work). A
+  // completed search holds the best line for every region below it, which the nodes below then
+  // follow (no search of their own), so a tree whose root search completes is optimal among trees
+  // testing these lines (PfdStats::tests_optimal). freedoom2 MAP27 (76 trees): optimal trees 14 ->
+  // 41 at 80 lines and 25M work (~0.2 s at most per tree); level 13 (65 lines, 527 nodes) mean tests
+  // 8.96 -> 7.54, entropy 6.82, in 11M work. Trees of more lines rarely complete within any budget
+  // that is small beside their build (at 100M, 3 of MAP27's 12 trees of 81-128 lines).
+  uint32_t root_search_lines = 80;
+  uint64_t root_search_work = 25'000'000;
   // Clip off W the slivers (narrower than 1e-9 of the region's extent) that BSP lines cut from it
   // only because plane coefficients are rounded (pfd_build_cgal.cpp, trimSlivers): each would be
   // a test for a leaf of no area. Eyes that close to a wall's plane leave the region.
@@ -148,6 +152,10 @@ struct PfdStats {
   // The mean tests the exhaustive search at the root predicted (PfdOptions::search_lines; double
   // regions): 0 where no search completed there. Build-only.
   double tests_search_mean = 0.0;
+  // The root's search: the lines it took (0: none, as more than root_search_lines cross the root
+  // region, or HFD) and its work (CellSearch::work), whether it completed or gave up. Build-only.
+  uint32_t root_search_lines = 0;
+  uint64_t root_search_work_done = 0;
   // No decision tree testing the BSP lines that cross the region has fewer mean tests (so where
   // tests_area_mean > 1.3 × the entropy bound, reordering the tests cannot meet that target): the
   // whole test order came from one completed exhaustive search at the root, followed down to every

@@ -19,6 +19,7 @@
 #include "bsp/exact_sign.h"
 #include "pfd_hfd/pfd.h"
 #include "pfd_hfd/pfd_internal.h"
+#include "pfd_hfd/pfd_search.h"
 
 namespace walkvis {
 namespace {
@@ -168,9 +169,14 @@ int cornerSign(const Line& l, const Corner& k, Counters& counters) {
 
 constexpr int kCross = 2;
 
-// PfdOptions::search_lines is capped here: the search's memo has 3^lines entries (13 bytes each:
-// 6.9 MB at 12 lines).
-constexpr uint32_t kMaxSearchLines = 12;
+// CellSearch keeps a class's sides in one LineBits.
+static_assert(kPfdMaxSearchLines == kSearchMaxLines);
+// A search's classes (leaves of the model; O(lines²) in one convex piece) and memo are bounded
+// whatever its lines: a search given up costs the greedy choice, never the build. The memo (one per
+// tree being built, freed with it) is outside PfdOptions::max_memory, which bounds what the tree
+// keeps.
+constexpr size_t kMaxSearchClasses = 4096;
+constexpr size_t kSearchMemoBytes = size_t{64} << 20;
 
 // tests_optimal needs the tree's exact mean tests and the search's prediction to agree this closely
 // (relative): both sum the same leaves' areas in doubles by different clips (~1e-15 each), while a
@@ -1022,151 +1028,20 @@ class Builder {
     return out;
   }
 
-  // ---- Exhaustive choice on small regions (PfdOptions::search_lines) ----
-  // In double precision: it only decides WHICH crossing line to test next; every classification
-  // the tree relies on stays exact. A line counts as crossing a double region where it leaves a
-  // vertex strictly on each side, except where one side is a sliver the build trims instead of
-  // testing (crossesD), so that the model costs the tree the build makes; where the two still
+  // ---- Exhaustive choice (PfdOptions::search_lines, root_search_lines) ----
+  // An optimal order of the lines still to be tested in a region, by CellSearch (pfd_search.h), in
+  // double precision: it only decides WHICH crossing line to test next; every classification the
+  // tree relies on stays exact. A line counts as crossing a double region where it leaves a vertex
+  // strictly on each side, except where one side is a sliver the build trims instead of testing
+  // (SearchLine::reach), so that the model costs the tree the build makes; where the two still
   // differ (a touching line that rounding shows as crossing, a sliver's area) the tree's exact mean
   // tests differs from the prediction and tests_optimal stays false.
-  // Convex pieces stored flat (piece k: pts[start[k], start[k + 1])), so that clearing one keeps
-  // its memory: a search clips thousands of times and allocates nothing once warm.
-  struct DRegion {
-    std::vector<glm::dvec2> pts;
-    std::vector<uint32_t> start{0};
-    size_t pieces() const { return start.size() - 1; }
-    void clear() {
-      pts.clear();
-      start.assign(1, 0);
-    }
-  };
-
-  static double lineValue(const Line& l, const glm::dvec2& p) { return l.a * p.x + l.b * p.y + l.c; }
-
-  // A line that reaches less than sliver_tol_ into one side only counts as not crossing: the build
-  // trims that sliver off instead of testing the line (trimSliver), and the model must cost it so.
-  bool crossesD(const DRegion& r, const Line& l) const {
-    double hi = 0.0, lo = 0.0;
-    for (const glm::dvec2& p : r.pts) {
-      const double v = lineValue(l, p);
-      hi = std::max(hi, v);
-      lo = std::min(lo, v);
-    }
-    if (!(hi > 0.0 && lo < 0.0)) return false;
-    if (!options_.trim_slivers) return true;
-    const double reach = sliverReach(l, sliver_tol_);
-    return (hi < reach) == (-lo < reach);
+  SearchLine searchLineOf(uint32_t id) const {
+    const Line& l = lines_[id];
+    return {l.a, l.b, l.c, options_.trim_slivers ? sliverReach(l, sliver_tol_) : 0.0};
   }
 
-  static double areaD(const DRegion& r) {
-    double total = 0.0;
-    for (size_t k = 0; k < r.pieces(); ++k) {
-      const uint32_t b = r.start[k], n = r.start[k + 1] - b;
-      double a = 0.0;
-      for (uint32_t i = 0; i < n; ++i) {
-        const glm::dvec2& u = r.pts[b + i];
-        const glm::dvec2& v = r.pts[b + (i + 1) % n];
-        a += u.x * v.y - v.x * u.y;
-      }
-      total += 0.5 * std::abs(a);
-    }
-    return total;
-  }
-
-  // Splits convex pieces by l (Sutherland–Hodgman on each side).
-  static void clipD(const DRegion& r, const Line& l, DRegion& front, DRegion& back) {
-    front.clear();
-    back.clear();
-    auto close = [](DRegion& d) {  // a piece of fewer than 3 corners has no area: dropped
-      if (d.pts.size() - d.start.back() >= 3) d.start.push_back(static_cast<uint32_t>(d.pts.size()));
-      else d.pts.resize(d.start.back());
-    };
-    for (size_t k = 0; k < r.pieces(); ++k) {
-      const uint32_t b = r.start[k], n = r.start[k + 1] - b;
-      for (uint32_t i = 0; i < n; ++i) {
-        const glm::dvec2& u = r.pts[b + i];
-        const glm::dvec2& v = r.pts[b + (i + 1) % n];
-        const double fu = lineValue(l, u), fv = lineValue(l, v);
-        if (fu >= 0) front.pts.push_back(u);
-        if (fu <= 0) back.pts.push_back(u);
-        if ((fu > 0 && fv < 0) || (fu < 0 && fv > 0)) {
-          const glm::dvec2 x = u + (fu / (fu - fv)) * (v - u);
-          front.pts.push_back(x);
-          back.pts.push_back(x);
-        }
-      }
-      close(front);
-      close(back);
-    }
-  }
-
-  // Per tree, reused by every search: clip scratch per recursion depth and a memo over the decision
-  // codes (a base-3 digit per line: 0 untested, 1 front, 2 back; < 3^search_lines), valid where its
-  // stamp is the current search's. `choice` keeps each code's best line, so that a completed search
-  // also gives the choice for every region below it (the plan, Builder::plan_).
-  struct SearchScratch {
-    std::vector<std::pair<DRegion, DRegion>> depth;  // front, back at each depth
-    std::vector<double> memo;
-    std::vector<int8_t> choice;  // position of the best line to test first; -1: no line crosses
-    std::vector<uint32_t> stamp;
-    uint32_t search = 0;
-  };
-  static constexpr uint32_t kPow3[kMaxSearchLines + 1] = {1,     3,      9,      27,      81,      243,    729,
-                                                          2187,  6561,   19683,  59049,   177147,  531441};
-  SearchScratch search_scratch_;
-
-  struct SearchState {
-    const std::vector<uint32_t>* lines = nullptr;  // the candidate lines, by position
-    uint64_t work = 0;                             // clips made
-    uint64_t limit = 0;                            // the search is given up beyond this many
-  };
-
-  // The least Σ over leaves of area × tests for the region r (area `area`), whose still-crossing
-  // candidates are the set bits of `mask`; `code` holds a base-3 digit per candidate position (1
-  // front, 2 back) of the tests on the way here, `level` how many. Memoised with the best first
-  // position per code (SearchScratch::choice).
-  double searchTests(const DRegion& r, double area, uint32_t mask, uint32_t code, uint32_t level, SearchState& st) {
-    SearchScratch& sc = search_scratch_;
-    if (mask == 0) {  // a leaf of the model: recorded, so that a plan can tell it from a missing code
-      sc.memo[code] = 0.0;
-      sc.choice[code] = -1;
-      sc.stamp[code] = sc.search;
-      return 0.0;
-    }
-    if (st.work > st.limit) return 0.0;  // over the budget: the caller drops the result
-    if (sc.stamp[code] == sc.search) return sc.memo[code];
-    const std::vector<uint32_t>& lines = *st.lines;
-    double best = INFINITY;
-    int best_i = -1;
-    DRegion& front = sc.depth[level].first;
-    DRegion& back = sc.depth[level].second;
-    for (uint32_t m = mask; m != 0; m &= m - 1) {
-      const int i = std::countr_zero(m);
-      const Line& l = lines_[lines[static_cast<size_t>(i)]];
-      clipD(r, l, front, back);
-      ++st.work;
-      const double af = areaD(front), ab = areaD(back);
-      uint32_t fm = 0, bm = 0;
-      for (uint32_t o = mask & ~(1u << i); o != 0; o &= o - 1) {
-        const int j = std::countr_zero(o);
-        const Line& lj = lines_[lines[static_cast<size_t>(j)]];
-        if (crossesD(front, lj)) fm |= 1u << j;
-        if (crossesD(back, lj)) bm |= 1u << j;
-      }
-      // The front side's search reuses deeper scratch only, so `back` is intact for its own.
-      const double v = searchTests(front, af, fm, code + kPow3[i], level + 1, st) +
-                       searchTests(back, ab, bm, code + 2 * kPow3[i], level + 1, st);
-      if (v < best) {
-        best = v;
-        best_i = i;
-      }
-    }
-    const double result = best_i < 0 ? area : area + best;
-    sc.memo[code] = result;
-    sc.choice[code] = static_cast<int8_t>(best_i);
-    sc.stamp[code] = sc.search;
-    return result;
-  }
+  CellSearch search_;
 
   // A completed search knows the best test order for the whole subtree below the node it was made
   // at (its memo holds the best line of every region it reached): the nodes below follow it instead
@@ -1175,10 +1050,10 @@ class Builder {
     bool active = false;
     int32_t owner = -1;           // the node it was made at
     size_t path_start = 0;        // path_lines_.size() at that node
-    uint32_t stamp = 0;           // the search whose memo it reads
     std::vector<uint32_t> lines;  // the search's lines, by position
   };
   Plan plan_;
+  std::vector<std::pair<uint32_t, int8_t>> plan_path_;
 
  public:
   // The root's search (the first node that tests a line): whether it completed and its plan was
@@ -1187,6 +1062,8 @@ class Builder {
   bool root_plan_left = false;  // the exact build left the model somewhere below the root
   double root_cost = 0.0, root_area = 0.0;
   double leaf_depth_area = 0.0;  // Σ over leaves of area × tests on the leaf's path
+  uint32_t root_search_lines = 0;
+  uint64_t root_search_work_done = 0;
 
  private:
   void leavePlan() {
@@ -1198,23 +1075,18 @@ class Builder {
   // not know the region: a line it did not see was tested, the model has no line crossing there, or
   // its line does not cross r exactly. The plan then ends.
   uint32_t planLine(const Region& r) {
-    const SearchScratch& sc = search_scratch_;
-    uint32_t code = 0;
+    plan_path_.clear();
     for (size_t k = plan_.path_start; k < path_lines_.size(); ++k) {
-      size_t pos = 0;
+      uint32_t pos = 0;
       while (pos < plan_.lines.size() && lines_[plan_.lines[pos]].canon != path_lines_[k]) ++pos;
       if (pos == plan_.lines.size()) {
         leavePlan();
         return UINT32_MAX;
       }
-      code += kPow3[pos] * (path_sides_[k] > 0 ? 1 : 2);
+      plan_path_.push_back({pos, path_sides_[k]});
     }
-    if (sc.search != plan_.stamp || sc.stamp[code] != plan_.stamp || sc.choice[code] < 0) {
-      leavePlan();
-      return UINT32_MAX;
-    }
-    const uint32_t line = plan_.lines[static_cast<size_t>(sc.choice[code])];
-    if (side(line, r) == kCross) return line;
+    const std::optional<uint32_t> pos = search_.bestLine(plan_path_);
+    if (pos && side(plan_.lines[*pos], r) == kCross) return plan_.lines[*pos];
     leavePlan();
     return UINT32_MAX;
   }
@@ -1229,7 +1101,7 @@ class Builder {
       return UINT32_MAX;
     const uint32_t max_lines =
         std::min(root ? std::max(options_.search_lines, options_.root_search_lines) : options_.search_lines,
-                 kMaxSearchLines);
+                 kSearchMaxLines);
     // One line per canonical plane: two BSP nodes on one plane are one test.
     std::vector<uint32_t> lines;
     for (uint32_t id : cands) {
@@ -1238,49 +1110,39 @@ class Builder {
       if (!dup) lines.push_back(id);
       if (lines.size() > max_lines) return UINT32_MAX;
     }
-    SearchScratch& sc = search_scratch_;
-    const size_t codes = kPow3[lines.size()];
-    if (sc.memo.size() < codes) {
-      sc.memo.resize(codes);
-      sc.choice.resize(codes);
-      sc.stamp.resize(codes, 0);
-    }
-    if (sc.depth.size() < lines.size() + 1) sc.depth.resize(lines.size() + 1);
-    if (++sc.search == 0) {  // the stamps wrapped: none may look current
-      std::fill(sc.stamp.begin(), sc.stamp.end(), 0);
-      sc.search = 1;
-    }
     DRegion dr;
     for (const auto& ring : rings(r)) {
       dr.pts.insert(dr.pts.end(), ring.begin(), ring.end());
       dr.start.push_back(static_cast<uint32_t>(dr.pts.size()));
     }
-    SearchState st;
-    st.lines = &lines;
-    st.limit = root ? std::max(options_.root_search_work, options_.search_work) : options_.search_work - search_work_;
-    uint32_t mask = 0;
-    for (size_t i = 0; i < lines.size(); ++i)
-      if (crossesD(dr, lines_[lines[i]])) mask |= 1u << i;
-    const double area = areaD(dr);
-    const double cost = searchTests(dr, area, mask, 0, 0, st);
-    if (!root) search_work_ += st.work;
-    if (st.work > st.limit) {  // given up: the budget is spent, the greedy choice from here on
-      if (!root) search_work_ = options_.search_work;
+    std::vector<SearchLine> model(lines.size());
+    for (size_t i = 0; i < lines.size(); ++i) model[i] = searchLineOf(lines[i]);
+    const uint64_t limit =
+        root ? std::max(options_.root_search_work, options_.search_work) : options_.search_work - search_work_;
+    std::optional<double> cost;
+    if (search_.init(dr, model, kMaxSearchClasses)) cost = search_.solve(limit, kSearchMemoBytes);
+    if (root) {
+      root_search_lines = static_cast<uint32_t>(lines.size());
+      root_search_work_done = search_.work();
+    } else {
+      search_work_ += search_.work();
+    }
+    if (!cost) {  // given up: the budget is spent, the greedy choice from here on
+      if (!root && search_.work() > limit) search_work_ = options_.search_work;
       return UINT32_MAX;
     }
-    const int choice = sc.choice[0];
-    if (choice < 0) return UINT32_MAX;
+    const std::optional<uint32_t> first = search_.bestLine({});
+    if (!first) return UINT32_MAX;
     plan_.active = true;
     plan_.owner = node;
     plan_.path_start = path_lines_.size();
-    plan_.stamp = sc.search;
     plan_.lines = std::move(lines);
-    if (node == 0) {
+    if (root) {
       root_planned = true;
-      root_cost = cost;
-      root_area = area;
+      root_cost = *cost;
+      root_area = search_.area();
     }
-    return plan_.lines[static_cast<size_t>(choice)];
+    return plan_.lines[*first];
   }
 
   // Which pieces of r lie on the positive side of l, one bit each, where l cuts none of them (at
@@ -1337,7 +1199,7 @@ class Builder {
     out.complete = true;
     return out;
   }
-  static constexpr size_t kMaxRootCandidates = 64;  // a root search takes at most 12 distinct lines
+  static constexpr size_t kMaxRootCandidates = kSearchMaxLines;  // a search's most lines
 
   uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r, int32_t node) {
     if (plan_.active) {
@@ -1386,9 +1248,24 @@ class Builder {
     return true;
   }
 
+  // Drops the pieces of r narrower than sliver_tol_ (twice the area over the box's diagonal), while
+  // a wider one remains. A line that crosses one piece and grazes another leaves a needle of the
+  // second on its far side (two walls' lines 6e-14 apart: freedoom2 MAP04 level 1, a needle of
+  // area 3e-11 and length 18), which every line along it then crosses: the eyes there leave W, as
+  // at trimSlivers, instead of costing tests for leaves of no width. The search's model never
+  // sees such a needle (it cuts piece by piece, with the same sliver rule), so its plan lasts.
+  void dropNeedles(Region& r) const {
+    if (!options_.trim_slivers || r.size() < 2) return;
+    auto thin = [&](const Piece& p) {
+      return 2.0 * pieceArea(p) < sliver_tol_ * std::hypot(p.hix - p.lox, p.hiz - p.loz);
+    };
+    if (std::all_of(r.begin(), r.end(), thin)) return;
+    r.erase(std::remove_if(r.begin(), r.end(), thin), r.end());
+  }
+
   std::vector<uint32_t> path_lines_;  // canonical ids of the lines tested on the way to this node
   std::vector<int8_t> path_sides_;    // and the side taken after each (+1 front, -1 back)
-  uint64_t search_work_ = 0;      // clips made by searchLine in this tree
+  uint64_t search_work_ = 0;      // CellSearch::work spent by this tree's per-node searches
   double sliver_tol_ = 0.0;       // kSliverTolerance × the root region's extent
   static constexpr uint32_t kMaxTrimsPerNode = 64;  // a guard: each trim removes a line's crossing
 
@@ -1404,6 +1281,7 @@ class Builder {
   int32_t build(Region r, std::vector<Item> stack, uint64_t depth) {
     const int32_t index = static_cast<int32_t>(out_.nodes.size());
     out_.nodes.push_back({});
+    dropNeedles(r);
     region_id_ = ++region_counter_;
     depth_max = std::max(depth_max, depth);
     const uint32_t first_ref = static_cast<uint32_t>(out_.run_refs.size());
@@ -1709,6 +1587,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.tests_huffman_bound = huffmanMeanDepth(builder.leaf_areas);
   s.tests_cell_bound = s.region_area > 0.0 ? builder.leaf_bound_tests / s.region_area : 0.0;
   s.tests_area_mean = s.region_area > 0.0 ? builder.leaf_depth_area / s.region_area : 0.0;
+  s.root_search_lines = builder.root_search_lines;
+  s.root_search_work_done = builder.root_search_work_done;
   if (builder.root_planned && builder.root_area > 0.0) {
     s.tests_search_mean = builder.root_cost / builder.root_area;
     // The plan reached every leaf, and the exact tree costs what the double model said: then no

@@ -34,6 +34,8 @@ struct BuildArgs {
   uint32_t stat_eyes = 10000;
   uint32_t search_lines = PfdOptions{}.search_lines;
   uint64_t search_work = PfdOptions{}.search_work;
+  uint32_t root_search_lines = PfdOptions{}.root_search_lines;
+  uint64_t root_search_work = PfdOptions{}.root_search_work;
   bool json = false;
 };
 
@@ -141,6 +143,8 @@ int runBuild(const BuildArgs& args) {
   options.tree.stat_eyes = args.stat_eyes;
   options.tree.search_lines = args.search_lines;
   options.tree.search_work = args.search_work;
+  options.tree.root_search_lines = args.root_search_lines;
+  options.tree.root_search_work = args.root_search_work;
 
   auto progress = [](const std::string& line) {
     std::fprintf(stderr, "%s\n", line.c_str());
@@ -208,6 +212,8 @@ int runBuild(const BuildArgs& args) {
   j["share_min"] = args.share_min;
   j["search_lines"] = args.search_lines;
   j["search_work"] = args.search_work;
+  j["root_search_lines"] = args.root_search_lines;
+  j["root_search_work"] = args.root_search_work;
   j["total_bytes"] = used;
   uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0;
   auto trees = nlohmann::ordered_json::array();
@@ -239,6 +245,8 @@ int runBuild(const BuildArgs& args) {
       e["tests_area_mean"] = s.tests_area_mean;
       e["tests_search_mean"] = s.tests_search_mean;
       e["tests_optimal"] = s.tests_optimal;
+      e["root_search_lines"] = s.root_search_lines;
+      e["root_search_work_done"] = s.root_search_work_done;
       e["nodes"] = s.nodes;
       e["list_entries"] = s.list_entries;
       e["list_fragments"] = s.list_fragments;
@@ -353,10 +361,17 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                   "runs per query); 4294967295: flat runs only");
   sub->add_option("--stat-eyes", args->stat_eyes, "Random eyes per tree for tests_mean / tests_max");
   sub->add_option("--search-lines", args->search_lines,
-                  "pfd: exhaustive choice of the next test where at most this many lines remain (0: off; at most "
-                  "12: the search's memo has 3^lines entries)")
-      ->check(CLI::Range(0u, 12u));
-  sub->add_option("--search-work", args->search_work, "pfd: clips one tree may spend on exhaustive choices")
+                  "pfd: optimal choice of the next tests where at most this many lines remain (0: off, also at "
+                  "the root)")
+      ->check(CLI::Range(0u, kPfdMaxSearchLines));
+  sub->add_option("--search-work", args->search_work,
+                  "pfd: work one tree may spend on those searches (classes × lines of the regions expanded; ~8 ns each)")
+      ->check(CLI::Range(uint64_t{0}, uint64_t{1} << 40));
+  sub->add_option("--root-search-lines", args->root_search_lines,
+                  "pfd: optimal choice of the whole tree where at most this many lines cross the root region")
+      ->check(CLI::Range(0u, kPfdMaxSearchLines));
+  sub->add_option("--root-search-work", args->root_search_work,
+                  "pfd: work the root's search may spend (its own budget)")
       ->check(CLI::Range(uint64_t{0}, uint64_t{1} << 40));
   sub->add_flag("--json", args->json, "Print one JSON object");
   sub->callback([args, &runner] { runner = [args] { return runBuild(*args); }; });

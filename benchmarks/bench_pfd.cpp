@@ -7,8 +7,12 @@
 // walk alone, its answer unexpanded).
 //
 //   bench_pfd [--scenes=gen:office,freedoom2.wad:MAP01] [--level=largest|INDEX] [--eyes=4096]
-//             [--share-min=64 (PfdOptions::share_min; 4294967295: flat runs only)]
+//             [--share-min=64 (PfdOptions::share_min; 4294967295: flat runs only)] [--build]
 //             [google benchmark flags, e.g. --benchmark_min_time=0.2]
+// --build adds the build of the level's trees with the optimal test-order searches
+// (PfdOptions::search_lines, root_search_lines) and without (the greedy even split), each
+// iteration a whole buildPfdLevel; counters: tests_mean = area-weighted exact mean tests over the
+// cells, optimal = cells flagged tests_optimal.
 // The tree is built as `walkvis build` builds it (buildPfdLevel: view cells above 64 MiB); each
 // eye is queried in the cell that holds it (resolved once, before timing, as a walkthrough does
 // when it changes cells).
@@ -34,6 +38,9 @@ namespace {
 struct BenchLevel {
   std::string name;
   BspTree bsp;
+  FloorLevel floor;  // the level's walkable region, for the build benchmark
+  uint32_t level_index = 0;
+  double eye_height = 0.0;
   PfdLevel level;
   std::vector<glm::dvec3> eyes;         // random eyes of the level's region
   std::vector<const PfdTree*> trees;    // the cell tree of each eye
@@ -55,6 +62,9 @@ std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& 
     if (li >= scene.levels.size()) throw SceneError(spec + ": no level " + level_choice);
   }
   b->bsp = buildBsp(scene);
+  b->floor = scene.levels[li];
+  b->level_index = static_cast<uint32_t>(li);
+  b->eye_height = scene.eye_height;
   PfdLevelOptions options;
   options.tree.stat_eyes = 0;
   options.tree.share_min = share_min;
@@ -193,6 +203,28 @@ void benchBsp(benchmark::State& state, std::shared_ptr<BenchLevel> b) {
   setCounters(state, static_cast<double>(state.iterations()) * static_cast<double>(b->bsp.nodes.size()), ids, *b);
 }
 
+// The level's trees built as `walkvis build` builds them, with the searches (search = true) or
+// with the greedy even split alone.
+void benchBuild(benchmark::State& state, std::shared_ptr<BenchLevel> b, bool search) {
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 0;
+  if (!search) options.tree.search_lines = 0;
+  double area_tests = 0.0, area = 0.0, optimal = 0.0;
+  for (auto _ : state) {
+    uint64_t used = 0;
+    const PfdLevel level = buildPfdLevel(b->bsp, b->floor, b->level_index, b->eye_height, options, used);
+    area_tests = area = optimal = 0.0;
+    for (const PfdTree& t : level.cells) {
+      area_tests += t.stats.tests_area_mean * t.stats.region_area;
+      area += t.stats.region_area;
+      optimal += t.stats.tests_optimal;
+    }
+  }
+  state.counters["tests_mean"] = area > 0.0 ? area_tests / area : 0.0;
+  state.counters["optimal"] = optimal;
+  state.counters["N"] = static_cast<double>(b->bsp.fragments.size());
+}
+
 }  // namespace
 }  // namespace walkvis
 
@@ -202,6 +234,7 @@ int main(int argc, char** argv) {
   std::string level = "largest";
   uint32_t eyes = 4096;
   uint32_t share_min = PfdOptions{}.share_min;
+  bool build = false;
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (std::strncmp(argv[i], "--scenes=", 9) == 0) scenes = argv[i] + 9;
@@ -209,6 +242,7 @@ int main(int argc, char** argv) {
     else if (std::strncmp(argv[i], "--eyes=", 7) == 0) eyes = static_cast<uint32_t>(std::max(1l, std::atol(argv[i] + 7)));
     else if (std::strncmp(argv[i], "--share-min=", 12) == 0)
       share_min = static_cast<uint32_t>(std::strtoul(argv[i] + 12, nullptr, 10));
+    else if (std::strcmp(argv[i], "--build") == 0) build = true;
     else rest.push_back(argv[i]);
   }
   int rest_argc = static_cast<int>(rest.size());
@@ -225,6 +259,12 @@ int main(int argc, char** argv) {
       benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/random").c_str(), benchPfdQueryCoherent, b, false);
       benchmark::RegisterBenchmark((b->name + "/pfdQueryCoherent/walk").c_str(), benchPfdQueryCoherent, b, true);
       benchmark::RegisterBenchmark((b->name + "/bspBackToFront").c_str(), benchBsp, b);
+      if (build) {
+        benchmark::RegisterBenchmark((b->name + "/pfdBuild/greedy").c_str(), benchBuild, b, false)
+            ->Unit(benchmark::kMillisecond);
+        benchmark::RegisterBenchmark((b->name + "/pfdBuild/search").c_str(), benchBuild, b, true)
+            ->Unit(benchmark::kMillisecond);
+      }
     }
   } catch (const SceneError& e) {
     std::fprintf(stderr, "bench_pfd: %s\n", e.what());

@@ -77,10 +77,11 @@ struct PfdOptions {
   // region (at most kPfdMaxSearchLines), with its own budget (not spent from search_work). A
   // completed search holds the best line for every region below it, which the nodes below then
   // follow (no search of their own), so a tree whose root search completes is optimal among trees
-  // testing these lines (PfdStats::tests_optimal). freedoom2 MAP27 (76 trees): optimal trees 14 ->
-  // 41 at 80 lines and 25M work (~0.2 s at most per tree); level 13 (65 lines, 527 nodes) mean tests
-  // 8.96 -> 7.54, entropy 6.82, in 11M work. Trees of more lines rarely complete within any budget
-  // that is small beside their build (at 100M, 3 of MAP27's 12 trees of 81-128 lines).
+  // testing these lines (PfdStats::tests_optimal). freedoom2 MAP27 (76 trees): 41 flagged optimal
+  // at 80 lines and 25M work (~0.2 s at most per tree), 1 with the greedy split alone; level 13 (65
+  // lines, 527 nodes) mean tests 9.00 -> 7.54, entropy 6.82, in 11M work. Trees of more lines rarely
+  // complete within any budget that is small beside their build (at 128 lines and 100M, 4 of MAP27's
+  // 12 trees of 81-128 lines).
   uint32_t root_search_lines = 80;
   uint64_t root_search_work = 25'000'000;
   // Clip off W the slivers (narrower than 1e-9 of the region's extent) that BSP lines cut from it

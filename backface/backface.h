@@ -1,4 +1,5 @@
-// Run-time backface culling of a polygon set: one interface, several methods (issue 6).
+// Run-time backface culling of a polygon set: one interface, several methods. Papers (keys of
+// docs/REFERENCES.md): [ZhangHoff1997], [JohannsenCarter1998], [Kumar1996]; library [meshoptimizer].
 //
 //   polygon  plane test per polygon, the baseline                       (polygon_cull.cpp)
 //   mask     normal masks, Zhang & Hoff 1997                             (normal_mask.cpp)
@@ -6,12 +7,13 @@
 //   cone     meshoptimizer meshlet normal cones, the modern peer         (meshlet_cone.cpp)
 //   hierarchy  hierarchical back-face computation, Kumar et al. 1996    (hierarchical_kumar.cpp, kumar.h)
 //
-// Facing (DESIGN.md): a polygon with plane n·x = d is front-facing for an eye e exactly when e is
-// strictly in its front half-space, n·e > d, evaluated as isFrontFacing() below. Every method is
-// conservative: it never culls a polygon that isFrontFacing() calls front-facing, for any eye
-// (view direction and field of view only sharpen a method; they never make it cull a front face,
-// except the mask's view cone, BackfaceOptions::MaskCone::kView, which may cull front faces wholly
-// outside the view cone: documented where it is declared).
+// Facing (docs/DESIGN.md, "Facing at emission"): a polygon with plane n·x = d is front-facing for
+// an eye e exactly when e is strictly in its front half-space, n·e > d, evaluated as
+// isFrontFacing() below. Every method is conservative: it never culls a polygon that
+// isFrontFacing() calls front-facing, for any eye (view direction and field of view only sharpen a
+// method; they never make it cull a front face, except the mask's view cone,
+// BackfaceOptions::MaskCone::kView, which may cull front faces wholly outside the view cone:
+// documented where it is declared).
 //
 // Usage: build once (makeBackfaceCuller), then per frame cull(view, unit_culled) into a buffer of
 // unitCount() bytes that the caller owns; cull() allocates nothing. A method culls *units*: a unit
@@ -108,7 +110,7 @@ struct BackfaceOptions {
   // cluster: the flat pass's vector path (kAuto: AVX2 where the CPU has it, else SSE2); the others
   // exist so that tests can check that the paths agree.
   BackfaceSimd simd = BackfaceSimd::kAuto;
-  // cone: meshlet limits (the issue asks for 64 / 124) and meshoptimizer's cone_weight.
+  // cone: meshlet limits (64 / 124, docs/DESIGN.md, "Targets") and meshoptimizer's cone_weight.
   uint32_t cone_max_vertices = 64;
   uint32_t cone_max_triangles = 124;
   float cone_weight = 0.5f;

@@ -1,11 +1,12 @@
 // Clustered backface culling: Johannsen & Carter, "Clustered Backface Culling", Journal of
-// Graphics Tools 3(1), 1998 (/work/shared/papers/johannsen-carter1998-clustered-backface.md).
+// Graphics Tools 3(1), 1998 [JohannsenCarter1998].
 //
 // §2.1 test: a cluster with normals n_i and plane offsets n_i·p_i is all back-facing from e when
 //   Comp_e'(N, M)·e' − d <= 0,   e' = e − b,   N = min_i n_i,  M = max_i n_i (component-wise),
 //   d = min_i n_i·(p_i − b),    Comp picks N^c where e'^c <= 0 and M^c where e'^c > 0      (8)
 // stored in single precision as N, M, d, b: 40 bytes (§2.4). §2.3 hierarchy: inner nodes merge
-// their children (N* = min, M* = max — the printed formula says min for M*, a slip, DESIGN.md),
+// their children (N* = min, M* = max — the printed formula says min for M*, a slip: docs/DESIGN.md,
+// "Corrections"),
 // re-choose b* and recompute d* over their polygons, and add the front-face test
 //   Comp_e'(−M, −N)·e' + max_i n_i·(p_i − b) <= 0  (4 more bytes)
 // so traversal stops at clusters that are all back-facing (culled) or all front-facing (kept).
@@ -28,7 +29,7 @@
 // parts' weighted mean). We use −T. A cluster is capped at kMaxClusterPolygons (ours: keeps the
 // build O(n·cap) on large coplanar regions).
 //
-// Per frame (issue 6, ours): without the hierarchy (the default) every leaf test is evaluated,
+// Per frame (ours): without the hierarchy (the default) every leaf test is evaluated,
 // eight clusters per block of structure-of-arrays floats, a block per AVX2 operation where the CPU
 // has AVX2 (checked at build) and four clusters per SSE operation otherwise, with
 // Comp_e'(N, M)·e' = Σ_c max(N^c·e'^c, M^c·e'^c) (no branch), the flags written 8 bytes at a time;

@@ -1,5 +1,5 @@
 // Hierarchical back-face computation: Kumar, Manocha, Garrett & Lin 1996
-// (/work/shared/papers/kumar1996-hierarchical-backface.md). Method `hierarchy`.
+// [Kumar1996]. Method `hierarchy`.
 //
 // §4 clusters: polygons are grouped by normal (a grid on the cube faces of the normal: all normals
 // of a cell are within 90° of the cell's axis, so both regions of every cluster have an interior)

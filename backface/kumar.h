@@ -1,4 +1,5 @@
-// Kumar, Manocha, Garrett & Lin 1996, "Hierarchical back-face computation" (method `hierarchy`):
+// Kumar, Manocha, Garrett & Lin 1996, "Hierarchical back-face computation" [Kumar1996] (method
+// `hierarchy`):
 // the pieces below BackfaceCuller, exposed so that tests can compare view-point tracking with the
 // full region membership test. Implementation: hierarchical_kumar.cpp (clusters, tracking) and
 // kumar_regions_cgal.cpp (the CGAL step: LP for an interior point, convex hull in the dual).

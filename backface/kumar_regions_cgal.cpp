@@ -1,5 +1,5 @@
 // The CGAL step of Kumar, Manocha, Garrett & Lin 1996, "Hierarchical back-face computation"
-// (/work/shared/papers/kumar1996-hierarchical-backface.md), §5.1–5.2, Algorithms I and II:
+// [Kumar1996], §5.1–5.2, Algorithms I and II:
 // a feasible point O strictly inside the intersection of half-spaces by linear programming, then
 // the dual points of the planes about O and their convex hull, whose vertices are the boundary
 // planes h^b and whose edges are the boundary lines l^b.

@@ -1,4 +1,4 @@
-// Backface culling inside priority lists (list_cull.h; issue 6, DESIGN.md "Facing at emission").
+// Backface culling inside priority lists (list_cull.h; docs/DESIGN.md, "Facing at emission").
 // The methods are those of backface.h, each citing its paper in its own file:
 //   polygon, region  the plane test per polygon (polygon_cull.cpp)
 //   mask             Zhang & Hoff 1997 normal masks (normal_mask.cpp, normal_mask.h)

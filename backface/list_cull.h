@@ -1,4 +1,4 @@
-// Backface culling inside priority lists (issue 6; DESIGN.md "Facing at emission"): a PFD/HFD
+// Backface culling inside priority lists (docs/DESIGN.md, "Facing at emission"): a PFD/HFD
 // query yields a handful of runs (ranges of one index array); each run gets its own culling
 // structure, built once per tree (clusters formed per run), tested per frame for the runs a query
 // yields. Also the whole-scene case (the BSP path and the z-buffer baseline): one run of all.

@@ -1,4 +1,4 @@
-// The modern peer: meshlet normal-cone culling from meshoptimizer (Arseny Kapoulkine,
+// The modern peer: meshlet normal-cone culling from meshoptimizer [meshoptimizer] (Arseny Kapoulkine,
 // https://github.com/zeux/meshoptimizer, Debian libmeshoptimizer-dev): meshopt_buildMeshlets
 // (64 vertices / 124 triangles), meshopt_computeMeshletBounds, and the cone test that the header
 // documents as the one safe for perspective, with the meshlet's bounding sphere:
@@ -10,7 +10,8 @@
 // 32 bytes per meshlet. No margin of ours: this is the library's test as documented, measured as
 // it is (false culls, if any, are the library's float arithmetic and are reported).
 //
-// Zero-area polygons (issue 6 follow-up: the 2,327 "false culls" in the Freedoom MAP01 PFD lists):
+// Zero-area polygons (they were the 2,327 "false culls" `bench backface` reported in the Freedoom
+// MAP01 PFD lists):
 // meshopt_computeClusterBounds (clusterizer.cpp) skips triangles whose float cross product is
 // exactly zero, as invisible, and returns all-zero bounds for a meshlet of only such triangles
 // (its comment: "degenerate cluster, no valid triangles => trivial reject (cone data is 0)"); the

@@ -1,5 +1,5 @@
 // Normal masks: Zhang & Hoff, "Fast Backface Culling Using Normal Masks", I3D 1997
-// (/work/shared/papers/zhang-hoff1997-normal-masks.md).
+// [ZhangHoff1997].
 //
 // §2: the normal sphere is cut by the N×N grids of the six faces of its bounding cube into 6·N²
 // clusters; a polygon stores its cluster as (byte offset, bit), two bytes. §3: per frame a cluster
@@ -18,10 +18,10 @@
 // cone to each object group"), which holds every direction from the eye to the group: conservative
 // for every polygon. An eye inside a group's sphere culls nothing in that group.
 //
-// Speed (issue 6, target <= 0.3 ns per polygon): the per-frame loop reads a 2-byte cluster id per
-// polygon and one byte of a 2048-byte table (normal_mask.h), no branch; within each group the
-// polygons are stored sorted by cluster id (the unit order is free: a renderer stores its polygons
-// in that order), so the table reads walk forward through the table.
+// Speed (target <= 0.3 ns per polygon, docs/DESIGN.md, "Targets"): the per-frame loop reads a
+// 2-byte cluster id per polygon and one byte of a 2048-byte table (normal_mask.h), no branch;
+// within each group the polygons are stored sorted by cluster id (the unit order is free: a
+// renderer stores its polygons in that order), so the table reads walk forward through the table.
 #include "backface/normal_mask.h"
 
 #if defined(__x86_64__) || defined(__i386__)

@@ -1,5 +1,5 @@
-// The normal-mask grid of Zhang & Hoff 1997 (normal_mask.cpp), shared by the whole-mesh culler
-// (method `mask`) and the priority-list culler (list_cull.cpp).
+// The normal-mask grid of Zhang & Hoff 1997 [ZhangHoff1997] (normal_mask.cpp), shared by the
+// whole-mesh culler (method `mask`) and the priority-list culler (list_cull.cpp).
 //
 // §2: the normal sphere is cut by the N×N grids of the six faces of its bounding cube into 6·N²
 // clusters (N <= 18, so 6·N² <= 2048 = the paper's 256-byte mask). A polygon stores its cluster id,

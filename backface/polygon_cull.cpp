@@ -1,7 +1,8 @@
 // The baseline: the plane test per polygon (the traditional backface test, e.g. Johannsen &
-// Carter 1998 §2: a polygon faces away from e iff n·(e − p) <= 0). Stored as n and d of each
-// plane, structure of arrays, in double: the test is isFrontFacing() itself, evaluated in the same
-// order of operations, so it culls exactly the polygons that are not front-facing.
+// Carter 1998 [JohannsenCarter1998] §2: a polygon faces away from e iff n·(e − p) <= 0). Stored as
+// n and d of each plane, structure of arrays, in double: the test is isFrontFacing() itself,
+// evaluated in the same order of operations, so it culls exactly the polygons that are not
+// front-facing.
 #include <numeric>
 
 #include "backface/backface.h"

@@ -1,5 +1,5 @@
 // Loop subdivision of an animated control mesh with Möller & Séquin's heuristic backface culling
-// (/work/shared/papers/moller-sequin-subdivision-backface.md); implementation in
+// [MollerSequin]; implementation in
 // subdivision_moller.cpp.
 //
 // Classes of a triangle at each level, for an eye e (a triangle (a, b, c) is front-facing when

@@ -1,8 +1,8 @@
 // Heuristic backface culling of animated Loop subdivision surfaces: Tomas Möller & Carlo H.
 // Séquin, "Heuristic Backface Culling of Animated Subdivision Surfaces"
-// (/work/shared/papers/moller-sequin-subdivision-backface.md). Loop's scheme: C. Loop, "Smooth
-// Subdivision Based on Triangles", MSc thesis, Utah 1987 (edge points 3/8·(a + b) + 1/8·(c + d);
-// vertex points (1 − nβ)·v + β·Σ neighbours with β = 3/16 for n = 3, else 3/(8n), Warren's weights).
+// [MollerSequin]. Loop's scheme: C. Loop, "Smooth Subdivision Surfaces Based on Triangles", MSc
+// thesis, Utah 1987 [Loop1987] (edge points 3/8·(a + b) + 1/8·(c + d); vertex points
+// (1 − nβ)·v + β·Σ neighbours with β = 3/16 for n = 3, else 3/(8n), Warren's weights [Warren1995]).
 //
 // Per level: status of every triangle not yet culled (front / back / strong / total, subdivision.h),
 // totally back-facing ones dropped; the others are split and only the vertices their children use

@@ -1,5 +1,6 @@
-// Query time of the PFD tree (James & Day 1998; DESIGN.md "PFD tree") against the BSP
-// back-to-front traversal it replaces (Fuchs, Kedem & Naylor 1980), on one level of a scene with
+// Query time of the PFD tree (James & Day 1998 [JamesDay1998]; docs/DESIGN.md, "PFD tree") against
+// the BSP back-to-front traversal it replaces (Fuchs, Kedem & Naylor 1980 [FuchsKedemNaylor1980]),
+// on one level of a scene with
 // pre-sampled eyes on its height plane, both with back faces skipped (the same sequence of
 // fragment ids). Counters: plane_tests = plane tests per query (PFD: internal nodes on the path;
 // BSP: one side test per node visited, i.e. every node), ids = fragment ids per query, runs =

@@ -3,7 +3,8 @@
 //
 // Method: a forward error bound decides almost every call in double arithmetic. Only a result
 // inside the bound goes on to an exact evaluation with floating-point expansions (Shewchuk,
-// "Adaptive precision floating-point arithmetic and fast robust geometric predicates", DCG 1997):
+// "Adaptive precision floating-point arithmetic and fast robust geometric predicates", DCG 1997
+// [Shewchuk1997]):
 // each product becomes an exact sum of two doubles (fma), the seven terms are summed exactly by
 // Grow-Expansion, and the sign is the sign of the largest nonzero component. Those steps are exact
 // unless a product comes near underflow or a term near overflow; only then does it call rational

@@ -1,7 +1,8 @@
 // PFD tree queries (James & Day, "The priority face determination tree for hidden surface
-// removal", Computer Graphics Forum 17(1), 1998; DESIGN.md, "PFD tree"): a root-to-leaf walk
+// removal", Computer Graphics Forum 17(1), 1998 [JamesDay1998]; docs/DESIGN.md, "PFD tree"): a
+// root-to-leaf walk
 // that appends each node's runs; the frame-coherent form keeps the prefix of the order that the
-// eye's move did not change (Kumar et al. 1996 track the view point the same way).
+// eye's move did not change (Kumar et al. 1996 [Kumar1996] track the view point the same way).
 #include <algorithm>
 #include <cmath>
 
@@ -236,8 +237,9 @@ double huffmanMeanDepth(std::span<const double> weights) {
   if (w.size() < 2) return 0.0;
   for (double& x : w) x /= total;
   std::sort(w.begin(), w.end());
-  // Two queues (van Leeuwen 1976): merged weights come out in non-decreasing order, so the two
-  // least are always at the fronts. Each merge adds its weight once per level it sinks.
+  // Two queues (van Leeuwen 1976 [vanLeeuwen1976]): merged weights come out in non-decreasing
+  // order, so the two least are always at the fronts. Each merge adds its weight once per level it
+  // sinks.
   std::vector<double> merged;
   merged.reserve(w.size());
   size_t a = 0, b = 0;

@@ -1,8 +1,9 @@
 // The PFD tree (James & Day, "The priority face determination tree for hidden surface removal",
-// Computer Graphics Forum 17(1), 1998; our definition is DESIGN.md, "PFD tree"): a binary decision
-// tree over the walkable region W of one height plane y = h. Each node holds a test-line (a BSP
-// plane cut by the height plane) and a priority list; for an eye v = (x, h, z) the concatenated
-// lists on v's root-to-leaf path draw exactly what backToFront(bsp, v, order, true) draws.
+// Computer Graphics Forum 17(1), 1998 [JamesDay1998]; our definition is docs/DESIGN.md, "PFD tree"):
+// a binary decision tree over the walkable region W of one height plane y = h. Each node holds a
+// test-line (a BSP plane cut by the height plane) and a priority list; for an eye v = (x, h, z) the
+// concatenated lists on v's root-to-leaf path draw exactly what backToFront(bsp, v, order, true)
+// draws.
 //
 // Built by partial evaluation of the BSP back-to-front traversal over regions of the height plane
 // (pfd_build_cgal.cpp): wherever the side of the current plane is the same for all of the region,
@@ -14,7 +15,7 @@
 // `fragment_ids`) or a sequence (a range of `seq_items`, each again a run or an older sequence).
 // The order of a fully resolved BSP subtree is the concatenation of its far child's order, its
 // node's fragments and its near child's order; such orders repeat each other's sub-orders on
-// every branch of the tree (DESIGN.md, "What is already known"), so an order of at least
+// every branch of the tree (docs/DESIGN.md, "Sizes and errors"), so an order of at least
 // `share_min` ids is stored as a sequence of references to its children's orders, each distinct
 // order once; shorter ones are stored flat. A query expands the references into flat runs.
 #pragma once
@@ -104,8 +105,9 @@ struct PfdOptions {
   // from its sub-regions), and a BSP subtree whose fragments are all hidden gets no test-line.
   const VisibilityScene* visibility = nullptr;
   // true: lists hold only fragments front-facing for every eye of their region (facing is known at
-  // emission, DESIGN.md: the exact `region` backface method). false: back-facing fragments are
-  // listed too, where backToFront(bsp, eye, order, false) puts them, for run-time culling methods.
+  // emission, docs/DESIGN.md, "Facing at emission": the exact `region` backface method). false:
+  // back-facing fragments are listed too, where backToFront(bsp, eye, order, false) puts them, for
+  // run-time culling methods.
   bool drop_back_faces = true;
 };
 
@@ -223,7 +225,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
                  const std::optional<PfdBox>& cell, const PfdOptions& options = {});
 
 // The test-lines that cross W ∩ cell (BSP node planes only) and its area: a tree's size grows
-// with the square of the crossing lines (DESIGN.md: nodes ≈ 0.25–0.34·L²), so view cells are
+// with the square of the crossing lines (docs/DESIGN.md, "Sizes and errors": nodes ≈ 0.25–0.34·L²),
+// so view cells are
 // chosen by this count before anything is built.
 struct PfdLineCount {
   uint64_t crossing = 0;
@@ -281,8 +284,9 @@ glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state);
 // Recomputes stats.tests_mean / tests_max over `eyes` random eyes (seeded) and stats.bytes.
 void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed);
 
-// The least mean depth of a binary tree whose leaves have these weights (Huffman 1952; weights
-// >= 0, any scale: they are normalised; 0 for fewer than two positive weights). O(L log L).
+// The least mean depth of a binary tree whose leaves have these weights (Huffman 1952
+// [Huffman1952]; weights >= 0, any scale: they are normalised; 0 for fewer than two positive
+// weights). O(L log L).
 double huffmanMeanDepth(std::span<const double> weights);
 
 // ---- Levels, view cells and the tree file ----

@@ -1,8 +1,9 @@
 // Building the PFD tree by partial evaluation of the BSP back-to-front traversal over regions of
 // the height plane (James & Day, "The priority face determination tree for hidden surface
-// removal", Computer Graphics Forum 17(1), 1998; definition and construction: DESIGN.md, "PFD
-// tree"). A region is a set of convex pieces with exact rational corners (CGAL's lazy exact
-// numbers): test-lines through corners happen (1–16% of decisions, DESIGN.md), and a corner that
+// removal", Computer Graphics Forum 17(1), 1998 [JamesDay1998]; definition and construction:
+// docs/DESIGN.md, "PFD tree"). A region is a set of convex pieces with exact rational corners
+// (CGAL's lazy exact numbers): test-lines through corners happen (1–16% of decisions,
+// docs/DESIGN.md, "Sizes and errors"), and a corner that
 // lies on a line must count as touching it, not crossing it. A double filter with a forward error
 // bound decides almost every corner sign; only the rest are evaluated exactly.
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>

@@ -1,6 +1,6 @@
-// One level's PFD trees and its view cells (DESIGN.md, "Height plane": "a large level is divided
-// into view cells rather than given one giant tree"; the sizes that make this necessary are in
-// "What is already known"). Cells are chosen before anything is built: a tree's size grows with
+// One level's PFD trees and its view cells (docs/DESIGN.md, "Height plane": a large level is cut
+// into view cells with a tree each; the sizes that make this necessary are in "Sizes and
+// errors"). Cells are chosen before anything is built: a tree's size grows with
 // the square of the test-lines that cross its region (nodes ≈ 0.25–0.34·L²), so a cell is cut in
 // four while that estimate exceeds the per-cell budget. A cell whose build still passes the budget
 // is abandoned at once (the builder checks after every node) and cut again. The cells of a level
@@ -23,7 +23,8 @@ namespace {
 // Bytes per crossing line squared: about 0.3·L² nodes of about 200 bytes each (node, list
 // references, pooled runs and the build's memo), measured on gen:office and freedoom2 maps.
 constexpr double kBytesPerLineSquared = 60.0;
-// Hidden-subtree pruning shrinks trees 5–30× in nodes (DESIGN.md): HFD cells are planned larger.
+// Hidden-subtree pruning shrinks trees 5–30× in nodes (docs/DESIGN.md, "Sizes and errors"): HFD
+// cells are planned larger.
 constexpr double kHfdShrink = 8.0;
 
 struct PlannedCell {

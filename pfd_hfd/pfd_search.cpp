@@ -1,8 +1,10 @@
 // The choice of test order in the PFD tree (James & Day, "The priority face determination tree
-// for hidden surface removal", Computer Graphics Forum 17(1), 1998, leave it to a heuristic): an
+// for hidden surface removal", Computer Graphics Forum 17(1), 1998 [JamesDay1998], leave it to a
+// heuristic): an
 // optimal binary decision tree over the cells of a line arrangement, found by depth-first branch
 // and bound with a memo over sets of classes. Lower bounds: Shannon's and Kraft's inequality (a
-// prefix code's mean length; Cover & Thomas, "Elements of Information Theory", ch. 5), with the
+// prefix code's mean length; Cover & Thomas, "Elements of Information Theory", ch. 5
+// [CoverThomas2006]), with the
 // cell bound of pfd_build_cgal.cpp (a line that bounds a leaf is tested on every path to it) as a
 // constraint on each leaf's depth, joined by a Lagrange multiplier (lowerBoundOf).
 #include "pfd_hfd/pfd_search.h"

@@ -1,4 +1,5 @@
-// A batch of HFD visibility queries (James & Day, "The hidden face determination tree", 1998:
+// A batch of HFD visibility queries (James & Day, "The hidden face determination tree", 1998
+// [JamesDay1998HFD]:
 // the area-to-area test at list promotion) run in parallel with TBB.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -1,13 +1,13 @@
 // Point-sampled area-to-area visibility for the HFD tree (James & Day, "The hidden face
-// determination tree", 1998: "acceptable visual results can be gained with point sampling"), with
-// occlusion rays through Embree 3 (Wald et al., "Embree: A Kernel Framework for Efficient CPU Ray
-// Tracing", SIGGRAPH 2014).
+// determination tree", 1998 [JamesDay1998HFD]: "acceptable visual results can be gained with point
+// sampling"), with occlusion rays through Embree 3 (Wald et al., "Embree: A Kernel Framework for
+// Efficient CPU Ray Tracing", SIGGRAPH 2014 [Embree2014]).
 //
 // What counts as seen matches the exact reference of walkthrough/raycast.h: only FRONT sides are
 // drawn, so a blocker stops a ray only when the ray meets its front side (an intersection filter
 // drops back-side hits), and the target counts as seen only from eyes in its front half-space.
 //
-// Sampling (DESIGN.md "What is already known": uniform samples miss walls seen through doors):
+// Sampling (docs/DESIGN.md, "Sizes and errors": uniform samples miss walls seen through doors):
 //  1. uniform: region corners, points along the region's edges and area-stratified interior points,
 //     against the target's (inset) corners and area-stratified interior points, paired in a
 //     diagonal order so that the first rays already use every eye and every target point;
@@ -811,8 +811,8 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     }
     // In front of the target: the region's nearest point to a point of the target moved out along
     // its normal, at stratified distances up to the target's diameter. A wall of one room of a
-    // large region is seen from that room only, which area samples hit rarely (DESIGN.md "What is
-    // already known": room grids); these eyes stand in it, facing the wall from a useful distance.
+    // large region is seen from that room only, which area samples hit rarely (docs/DESIGN.md,
+    // "Sizes and errors": room grids); these eyes stand in it, facing the wall from a useful distance.
     if (n_near > 0) {
       const double diameter = std::sqrt(diameter2(sc.target2));
       for (uint32_t k = 0; k < n_near; ++k) {

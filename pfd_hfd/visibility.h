@@ -1,5 +1,6 @@
 // Point-sampled area-to-area visibility for the HFD tree (James & Day, "The hidden face
-// determination tree", 1998; DESIGN.md "HFD tree"): is a BSP fragment visible from some point of a
+// determination tree", 1998 [JamesDay1998HFD]; docs/DESIGN.md, "HFD tree"): is a BSP fragment
+// visible from some point of a
 // region of the height plane? Rays run from sample points of the region (at the plane's height) to
 // sample points of the fragment (inset from its edges); one unblocked ray keeps the fragment, none
 // rejects it. The blockers are every fragment of the BSP: those drawn earlier lie behind the

@@ -1,5 +1,5 @@
 // Little helpers shared by walkvis' binary files (BSP and tree files): an append-only byte
-// writer and the FNV-1a 64 checksum over a payload. Native byte order (files are caches of a
+// writer and the FNV-1a 64 checksum [FNV] over a payload. Native byte order (files are caches of a
 // build, read back on the same kind of machine).
 #pragma once
 

@@ -1,5 +1,5 @@
-// gen:hard:<name> — one small building-like scene per hard case of DESIGN.md ("Hard cases
-// (numerical stability)"): a 10 m × 10 m × 3 m room (floor with a level, inward walls, ceiling)
+// gen:hard:<name> — one small building-like scene per hard case of docs/DESIGN.md, "Hard
+// cases": a 10 m × 10 m × 3 m room (floor with a level, inward walls, ceiling)
 // around the hard feature, so BSP/PFD/HFD tests can validate orders on it. Each case's comment
 // says what it stresses. All are deterministic and take no parameters.
 //
@@ -228,8 +228,8 @@ void heightPlanePolygons(Hard& h) {
 // Test-lines through region corners: an L-shaped walkable region in two pieces, walls on the
 // lines z = 0 and x = 0 that run through piece corners, and walls on the diagonals x = z and
 // x = -z that pass (mathematically) through corners (-5,-5), (0,0), (5,5) and (-5,5). Deciding
-// the side of a region whose corner lies on the line needs exact arithmetic (DESIGN.md: 1–16% of
-// decisions in Doom maps).
+// the side of a region whose corner lies on the line needs exact arithmetic (docs/DESIGN.md,
+// "Sizes and errors": 1–16% of decisions in Doom maps).
 void cornerTestLines(Hard& h) {
   h.wall({-kHalf, -kHalf}, {0, -kHalf}, 0, kHeight, {0, 0, 1});
   h.wall({0, -kHalf}, {0, 0}, 0, kHeight, {-1, 0, 0});

@@ -10,8 +10,8 @@
 // corridor and sometimes one to its neighbour in the row. Storeys repeat the plan (with their own
 // random rooms, doors and furniture) every height + slab metres; there are no stairs.
 //
-// What is modelled is only what can be seen from the walkable side (DESIGN.md, "Model only what
-// a scene needs"): per space a floor (up), a ceiling (down) and its four inner wall faces (facing
+// What is modelled is only what can be seen from the walkable side (docs/DESIGN.md, "Model only
+// what a scene needs"): per space a floor (up), a ceiling (down) and its four inner wall faces (facing
 // into the space) with gaps for openings; per opening the wall's thickness — two jambs (end
 // caps), a threshold floor and a lintel soffit (or a ceiling piece for full-height openings);
 // pillars as 4 outward sides; furniture boxes (desks, tables, cabinets) as a top and 4 outward
@@ -32,8 +32,8 @@
 // 102,699). Generation is linear: ~0.1–0.2 s for 100k polygons in Release.
 //
 // Randomness: splitmix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators",
-// OOPSLA 2014) with our own mapping to [0, 1), so a seed gives the same building with every
-// standard library (std::uniform_*_distribution differs between them).
+// OOPSLA 2014 [SteeleLeaFlood2014]) with our own mapping to [0, 1), so a seed gives the same
+// building with every standard library (std::uniform_*_distribution differs between them).
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -1,9 +1,10 @@
 // Small shape generators: gen:ninefacet, gen:sphere, gen:dome.
 //
 // ninefacet follows the teaching example of James & Day (1998), "The hidden face determination
-// tree", §4 and Figure 1 (/work/shared/papers/james-day1998-hfd-tree.md): nine single-sided
+// tree" [JamesDay1998HFD], §4 and Figure 1: nine single-sided
 // vertical facets around an open area, some facing each other, on a floor that gives the level.
-// The paper's figure is not reproduced in the text we have, so the layout is ours.
+// The paper's figure is not reproduced in its text, so the layout is ours (docs/DESIGN.md,
+// "Corrections").
 //
 // sphere is a geodesic sphere: the icosahedron with each face cut into n² triangles and the
 // vertices pushed onto the sphere, 20·n² triangles with n = round(sqrt(tris / 20)):

@@ -1,8 +1,9 @@
 // Convex partition of an odd-winding (even-odd) planar region.
 //
-// Sources: CGAL 5.5 user manual, 2D Triangulation, "Triangulating a Polygonal Domain"
+// Sources: CGAL 5.5 user manual [CGAL], 2D Triangulation, "Triangulating a Polygonal Domain"
 // (examples/Triangulation_2/polygon_triangulation.cpp: faces marked by nesting level from the
 // infinite face); S. Hertel and K. Mehlhorn, "Fast triangulation of simple polygons", FCT 1983
+// [HertelMehlhorn1983]
 // (remove a diagonal of a triangulation whenever both its endpoints stay convex; at most 4x the
 // optimal number of convex pieces).
 //

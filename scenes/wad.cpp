@@ -1,10 +1,10 @@
 // Doom-format WAD maps as walkvis scenes.
 //
-// Source: the Unofficial Doom Specs v1.666 (Matthew S. Fell, 1994), sections 1 (WAD directory)
-// and 4 (THINGS, LINEDEFS, SIDEDEFS, VERTEXES, SECTORS); the Doom source release (id Software
-// 1997, r_segs.c) for which parts of a two-sided line are drawn: the lower wall between the two
-// floors, the upper wall between the two ceilings, clipped to the open span of the sector that
-// sees it, and no upper wall where both ceilings are sky (F_SKY1).
+// Source: the Unofficial Doom Specs v1.666 (Matthew S. Fell, 1994 [DoomSpecs]), sections 1 (WAD
+// directory) and 4 (THINGS, LINEDEFS, SIDEDEFS, VERTEXES, SECTORS); the Doom source release (id
+// Software 1997, r_segs.c [DoomSource1997]) for which parts of a two-sided line are drawn: the
+// lower wall between the two floors, the upper wall between the two ceilings, clipped to the open
+// span of the sector that sees it, and no upper wall where both ceilings are sky (F_SKY1).
 //
 // Axes: Doom (x, y) in the map plane and heights z become walkvis (x, height, -y), so the scene is
 // right-handed with y up. Every wall, sector floor and sector ceiling is one input face.

@@ -687,8 +687,8 @@ TEST(Bsp, OfficeScene) {
 namespace walkvis {
 namespace {
 
-// The hard cases of DESIGN.md: nothing crashes, every fragment is listed once, and the order
-// agrees with ray casting from the start eye and from random eyes in the scene's box.
+// The hard cases (docs/DESIGN.md, "Hard cases"): nothing crashes, every fragment is listed once,
+// and the order agrees with ray casting from the start eye and from random eyes in the scene's box.
 TEST(Bsp, HardCases) {
   for (const std::string& name : hardCaseNames()) {
     Scene scene;

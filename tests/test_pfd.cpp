@@ -193,7 +193,8 @@ TEST(Pfd, RandomBuildingsMatchBspOrder) {
 // every heuristic, and the orders still equal the BSP's. More candidates for kBalanced (more of
 // them, or from beneath undecided lines too: deep_candidates) give more even splits and so fewer
 // tests on average (summed over seeds: a greedy choice is not better on
-// every single tree), and the default stays within 1.3 × the entropy bound (issue 4's target).
+// every single tree), and the default stays within 1.3 × the entropy bound (docs/DESIGN.md,
+// "Targets").
 TEST(Pfd, BalancedCandidatesFewerTestsSameLeaves) {
   double traversal_tests = 0.0, few_tests = 0.0, frontier_tests = 0.0, default_tests = 0.0, entropy = 0.0;
   for (uint64_t seed = 1; seed <= 3; ++seed) {

@@ -1,4 +1,4 @@
-// The PFD order property on real scenes (DESIGN.md "PFD tree", correctness): for random eyes on
+// The PFD order property on real scenes (docs/DESIGN.md, "PFD tree": correctness): for random eyes on
 // every level's height plane, the order of the view cell under the eye (findPfdCell, pfdQuery)
 // is exactly the sequence backToFront(bsp, eye, order, true) gives: the build is a partial
 // evaluation of that traversal, so not only the set of fragments but their order, even within

@@ -131,8 +131,9 @@ std::array<double, 2> savedAtThreeLevels(int refine) {
   return {saved, saved_last};
 }
 
-// The target (>= 40% fewer at 3 levels) on the 320-triangle blob. The 80-triangle blob is
-// too coarse for it (its first level culls little): it is held to what it does, ~39% and ~44%.
+// The target (>= 40% fewer at 3 levels; docs/DESIGN.md, "Targets") on the 320-triangle blob. The
+// 80-triangle blob is too coarse for it (its first level culls little): it is held to what it does,
+// ~39% and ~44%.
 TEST(Subdivision, CullingComputesFortyPercentFewerTriangles) {
   const auto fine = savedAtThreeLevels(2);
   EXPECT_GE(fine[0], 0.40);

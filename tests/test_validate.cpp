@@ -1,6 +1,6 @@
 // Validation of the BSP back-to-front order against exact ray casting: zero order-error pixels on
-// random scenes and generated scenes (office, ninefacet, the DESIGN.md hard cases), and the
-// `walkvis validate` command's JSON.
+// random scenes and generated scenes (office, ninefacet, the cases of docs/DESIGN.md, "Hard
+// cases"), and the `walkvis validate` command's JSON.
 #include <gtest/gtest.h>
 
 #include <array>

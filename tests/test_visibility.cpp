@@ -209,7 +209,7 @@ TEST(Visibility, HiddenFromRegionIsHiddenFromSubRegions) {
 // Sixteen closed rooms in a row ([5k, 5k + 5] x [0, 5], no doors) and, in room 4, a cabinet in
 // front of the side wall z = 5 that leaves only the wall's top 0.4 in view. Seen from the whole
 // row (one region over all sixteen rooms), the wall is visible from a sixteenth of the region,
-// over the cabinet (the office's misses, DESIGN.md "What is already known": room grids). The
+// over the cabinet (the office's misses, docs/DESIGN.md, "Sizes and errors": room grids). The
 // refinement finds it here without the samples in front too (printed); the office figures in
 // docs/hfd/README.md are where those samples show.
 TEST(Visibility, WallOfOneRoomKeptFromTheWholeRow) {

@@ -1,6 +1,7 @@
 // Walkthrough frames (frame.h): the order sources are the BSP back-to-front traversal (Fuchs, Kedem,
-// Naylor 1980) and the PFD/HFD trees (James & Day 1998; DESIGN.md "PFD tree", "HFD tree"); backface
-// culling inside priority lists is backface/list_cull.h (DESIGN.md "Facing at emission").
+// Naylor 1980 [FuchsKedemNaylor1980]) and the PFD/HFD trees (James & Day 1998 [JamesDay1998,
+// JamesDay1998HFD]; docs/DESIGN.md, "PFD tree" and "HFD tree"); backface culling inside priority
+// lists is backface/list_cull.h (docs/DESIGN.md, "Facing at emission").
 #include "walkthrough/frame.h"
 
 #include <algorithm>

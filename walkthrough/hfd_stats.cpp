@@ -1,6 +1,6 @@
-// Hidden-polygon rejection statistics (DESIGN.md "Validation and statistics"; the HFD tree of
-// James & Day, "The hidden face determination tree", 1998): listed fragments against an exact
-// 360° item buffer (walkthrough/raycast.h) at random eyes of every level.
+// Hidden-polygon rejection statistics (docs/DESIGN.md, "Hidden-polygon statistics"; the HFD tree
+// of James & Day, "The hidden face determination tree", 1998 [JamesDay1998HFD]): listed fragments
+// against an exact 360° item buffer (walkthrough/raycast.h) at random eyes of every level.
 #include "walkthrough/hfd_stats.h"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Hidden-polygon rejection statistics of an HFD (or PFD) tree file (DESIGN.md "Validation and
+// Hidden-polygon rejection statistics of an HFD (or PFD) tree file (docs/DESIGN.md, "Hidden-polygon
 // statistics"): at random eyes of every level, the fragments the tree lists are compared with
 // those an exact 360° item buffer shows (six 90° cube faces, one Embree ray per pixel centre,
 // walkthrough/raycast.h, front faces only).

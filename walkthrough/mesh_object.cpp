@@ -1,5 +1,6 @@
 // Mesh objects (mesh_object.h): Loop subdivision with Möller & Séquin's heuristic backface culling
-// (T. Möller, C. Séquin, "Backface culling for motion blur and subdivision surfaces", 1997;
+// (T. Möller, C. H. Séquin, "Heuristic backface culling of animated subdivision surfaces"
+// [MollerSequin];
 // backface/subdivision.h) of the animated blob (animatedBlob), placed in the start room.
 #include "walkthrough/mesh_object.h"
 

@@ -1,5 +1,5 @@
 // Mesh objects in the walkthrough: an animated Loop subdivision surface (backface/subdivision.h,
-// Möller & Séquin's heuristic culling; /work/shared/papers/moller-sequin-subdivision-backface.md)
+// Möller & Séquin's heuristic culling [MollerSequin])
 // placed in a scene's start room and tessellated per frame for the eye and the frame's time.
 //
 // Objects are not part of the BSP or the trees: painter's frames draw them after the scene with a

@@ -1,6 +1,6 @@
 // Exact reference by ray casting: Embree 3 (Wald et al., "Embree: A Kernel Framework for Efficient
-// CPU Ray Tracing", SIGGRAPH 2014) finds candidates in single precision; every decision that
-// classifies a pixel is re-made in double precision against the Polygon's own plane.
+// CPU Ray Tracing", SIGGRAPH 2014 [Embree2014]) finds candidates in single precision; every
+// decision that classifies a pixel is re-made in double precision against the Polygon's own plane.
 //
 // Back faces are skipped in an intersection filter (Embree 3 has backface culling only as a
 // compile-time option). The filter reads a per-view front-facing table through an extended

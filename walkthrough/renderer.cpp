@@ -266,7 +266,7 @@ void OffscreenRenderer::upload(std::span<const glm::dvec3> vertices, std::span<c
   s.makeCurrent();
   GladGLContext& gl = s.gl;
   s.vertices.assign(vertices.begin(), vertices.end());
-  // The id attribute is per vertex: DESIGN.md polygons own consecutive vertices, but a caller's
+  // The id attribute is per vertex: Scene polygons own consecutive vertices, but a caller's
   // polygons may share them, so every polygon gets its own copy of its vertex indices' slots.
   std::vector<uint32_t> ids;
   std::vector<glm::dvec3> own_vertices;

@@ -1,6 +1,6 @@
 // Offscreen OpenGL 4.5 ID-buffer renderer (OSMesa, software): every polygon drawn in one flat
-// unsigned id, no lighting, no anti-aliasing; back faces are never drawn (DESIGN.md "Validation
-// and statistics"). GL functions are loaded per context (glad --mx), so this can live beside a
+// unsigned id, no lighting, no anti-aliasing; back faces are never drawn (docs/DESIGN.md, "ID
+// images"). GL functions are loaded per context (glad --mx), so this can live beside a
 // windowed GL context in the same process.
 #pragma once
 

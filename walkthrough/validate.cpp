@@ -1,7 +1,8 @@
 // Priority-order validation: painter's and z-buffer ID images (OSMesa) against exact ray casting
-// (Embree + double re-check), DESIGN.md "Validation and statistics". The painter's algorithm and
-// the z-buffer are Newell, Newell & Sancha (1972) and Catmull (1974); the classification of
-// mismatching pixels into order errors, ties and coverage differences is ours (DESIGN.md).
+// (Embree [Embree2014] + double re-check), docs/DESIGN.md, "Validation and statistics". The
+// painter's algorithm and the z-buffer are Newell, Newell & Sancha (1972) [NewellNewellSancha1972]
+// and Catmull (1974) [Catmull1974]; the classification of mismatching pixels into order errors,
+// ties and coverage differences is ours (docs/DESIGN.md, "Order error").
 #include "walkthrough/validate.h"
 
 #include <png.h>

@@ -1,4 +1,4 @@
-// Priority-order validation against exact ray casting (DESIGN.md "Validation and statistics").
+// Priority-order validation against exact ray casting (docs/DESIGN.md, "Order error").
 // For sampled eyes and the six 90° faces around each, the painter's image of an order, and z-buffer
 // images at several depth precisions, are compared pixel by pixel with the exact reference.
 //

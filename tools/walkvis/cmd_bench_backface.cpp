@@ -36,12 +36,12 @@
 // run. Then the BSP path: every fragment of the level's BSP
 // with eyes anywhere in the scene's box, the same table as for meshes, its cluster rows clustered
 // for eyes in that box and cluster-paper with the paper's near field around each cluster.
-// Any scene with floor levels works for --lists (e.g. gen:office: eyes inside a building). Each table ends with the issue's
-// target line: cluster effectiveness >= cone's at no more ns per polygon (JSON: cluster_vs_cone).
-// --subdivision adds Möller & Séquin's culled Loop subdivision of the animated blob
-// (backface/subdivision.h) at 1..3 levels: triangles computed over the levels (full / culled),
-// the final level's, and the time per frame, over --eyes random eyes at 2–10 radii and times. With
-// --json the output is then {"meshes": [...], "subdivision": [...]}.
+// Any scene with floor levels works for --lists (e.g. gen:office: eyes inside a building). Each table ends with the
+// target line (docs/DESIGN.md, "Targets"): cluster effectiveness >= cone's at no more ns per
+// polygon (JSON: cluster_vs_cone). --subdivision adds Möller & Séquin's culled Loop subdivision of
+// the animated blob (backface/subdivision.h) at 1..3 levels: triangles computed over the levels
+// (full / culled), the final level's, and the time per frame, over --eyes random eyes at 2–10 radii
+// and times. With --json the output is then {"meshes": [...], "subdivision": [...]}.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -300,8 +300,8 @@ nlohmann::ordered_json benchInput(const std::string& label, const BackfaceInput&
   return mesh;
 }
 
-// The target: the clustered test's effectiveness at least the cone's, at no more cost per
-// polygon. Adds "cluster_vs_cone" to the mesh and prints a line.
+// The target (docs/DESIGN.md, "Targets"): the clustered test's effectiveness at least the cone's,
+// at no more cost per polygon. Adds "cluster_vs_cone" to the mesh and prints a line.
 void checkClusterVsCone(nlohmann::ordered_json& mesh, bool json) {
   const nlohmann::ordered_json* cluster = nullptr;
   const nlohmann::ordered_json* cone = nullptr;

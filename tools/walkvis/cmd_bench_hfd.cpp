@@ -1,5 +1,4 @@
-// walkvis bench hfd SCENE and walkvis bench rays SCENE (issue 5; DESIGN.md "Validation and
-// statistics", speed against error).
+// walkvis bench hfd SCENE and walkvis bench rays SCENE (docs/DESIGN.md, "Speed against error").
 //
 //   bench hfd SCENE [--region-samples LIST] [--polygon-samples LIST] [--refine-rays LIST]
 //                   [--views N] [--res PIXELS] [--max-levels K] [--max-seconds S] [--csv FILE] [--png FILE]

@@ -1,7 +1,8 @@
 // walkvis build SCENE -o FILE [--tree pfd|hfd]: the BSP and one PFD or HFD tree per floor level
 // (cut into view cells where a tree would be too large), their statistics, and one tree file
-// holding them all. HFD trees (James & Day 1998, DESIGN.md "HFD tree") test each fragment for
-// visibility from the node's region with a VisibilityScene of the whole BSP (pfd_hfd/visibility.h).
+// holding them all. HFD trees (James & Day 1998 [JamesDay1998HFD], docs/DESIGN.md, "HFD tree") test
+// each fragment for visibility from the node's region with a VisibilityScene of the whole BSP
+// (pfd_hfd/visibility.h).
 #include <algorithm>
 #include <chrono>
 #include <cmath>

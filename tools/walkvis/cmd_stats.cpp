@@ -1,5 +1,5 @@
 // walkvis stats FILE [--views N] [--res PIXELS] [--seed S] [--json] [--csv FILE]: hidden-polygon
-// rejection statistics of a tree file (walkthrough/hfd_stats.h; DESIGN.md "Validation and
+// rejection statistics of a tree file (walkthrough/hfd_stats.h; docs/DESIGN.md, "Hidden-polygon
 // statistics"): per level and overall, listed / visible / missed fragments, pixel_error_ratio,
 // rejection ratio and overestimation with means, maxima and histograms. Progress goes to stderr.
 #include <cstdio>

@@ -27,14 +27,19 @@ class GeneratorParams {
   std::set<std::string> used_;
 };
 
-// Dispatches on the name: office, ninefacet, sphere, dome, hard:<case>. Unknown names throw.
+// Dispatches on the name: office, ninefacet, sphere, dome, table_room, house, ramp, hard:<case>.
+// Unknown names throw.
 Scene generateScene(const std::string& name, GeneratorParams& params);
 
 Scene generateOffice(GeneratorParams& params);     // gen_office.cpp
 Scene generateNineFacet(GeneratorParams& params);  // gen_shapes.cpp
 Scene generateSphere(GeneratorParams& params);     // gen_shapes.cpp
 Scene generateDome(GeneratorParams& params);       // gen_shapes.cpp
-// Hard cases of DESIGN.md (gen_hard.cpp); hardCaseNames() lists them for tests and docs.
+// Buildings with their levels left empty for the navmesh (gen_buildings.cpp).
+Scene generateTableRoom(GeneratorParams& params);
+Scene generateHouse(GeneratorParams& params);
+Scene generateRamp(GeneratorParams& params);
+// The cases of docs/DESIGN.md, "Hard cases" (gen_hard.cpp); hardCaseNames() lists them for tests and docs.
 Scene generateHardCase(const std::string& name, GeneratorParams& params);
 std::vector<std::string> hardCaseNames();
 

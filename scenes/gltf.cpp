@@ -5,7 +5,8 @@
 // references stay inside what they point at, so every index and byte range used here is checked
 // first and anything malformed is a one-line SceneError naming the file. Each triangle of a
 // TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive of the default scene's node trees becomes one
-// input face, in world coordinates (node matrices or TRS applied). Images are never decoded.
+// input face, in world coordinates (node matrices or TRS applied); each primitive of a node instance
+// is one object for face merging (mesh_merge.h). Images are never decoded.
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -33,6 +34,7 @@
 #include <tiny_gltf.h>
 
 #include "scenes/loaders.h"
+#include "scenes/mesh_merge.h"
 #include "scenes/scene.h"
 
 namespace walkvis {
@@ -80,21 +82,6 @@ bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int
   return true;
 }
 
-// tinygltf's messages span lines and may quote a whole data URI: one short line instead.
-std::string oneLine(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '\n' || c == '\r') {
-      if (!out.empty() && out.back() != ' ') out += "; ";
-    } else if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) {
-      out += c;
-    }
-  }
-  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
-  if (out.size() > 200) out = out.substr(0, 200) + "...";
-  return out.empty() ? std::string("unknown error") : out;
-}
-
 // tinygltf turns `extras` and `extensions` into its own Value tree by recursion, one call per level:
 // deep nesting overflows the stack. Real glTF nests about ten levels; far more is refused up front.
 constexpr int kMaxJsonDepth = 256;
@@ -130,7 +117,8 @@ uint32_t u32le(const uint8_t* p) {
 
 class GltfBuilder {
  public:
-  GltfBuilder(const tinygltf::Model& model, const std::string& context) : model_(model), context_(context) {}
+  GltfBuilder(const tinygltf::Model& model, const std::string& context, bool merge)
+      : model_(model), context_(context), merge_(merge) {}
 
   [[noreturn]] void fail(const std::string& what) const { throw SceneError(context_ + ": " + what); }
 
@@ -403,6 +391,9 @@ class GltfBuilder {
       for (size_t i = 0; i < local.size(); ++i) world_pos[i] = glm::dvec3(world * glm::dvec4(local[i], 1.0));
       const std::optional<uint32_t> material_color = materialColor(prim.material, what);
       const std::string face_context = context_ + ": " + what;
+      // One object per primitive of a node instance (mesh_merge.h).
+      std::vector<uint32_t> object_indices;
+      object_indices.reserve(3 * triangles);
       for (size_t t = 0; t < triangles; ++t) {
         std::array<uint32_t, 3> tri;
         if (mode == TINYGLTF_MODE_TRIANGLES) {
@@ -414,24 +405,26 @@ class GltfBuilder {
         } else {
           tri = {order[0], order[t + 1], order[t + 2]};
         }
-        std::array<glm::dvec3, 3> v = {world_pos[tri[0]], world_pos[tri[1]], world_pos[tri[2]]};
-        if (flip) std::swap(v[1], v[2]);
-        const auto next_id = static_cast<uint32_t>(scene_.face_colors.size());
-        const uint32_t color = material_color ? *material_color : faceColor(next_id);
-        addFace(scene_, v, color, face_context);
+        if (flip) std::swap(tri[1], tri[2]);
+        object_indices.insert(object_indices.end(), tri.begin(), tri.end());
       }
+      const std::vector<uint32_t> sizes(triangles, 3u);
+      const std::vector<uint32_t> colors(triangles, material_color ? *material_color : kFaceColorById);
+      const MeshObjectInput object{world_pos, object_indices, sizes, colors};
+      addMeshObject(scene_, object, merge_, face_context);
     }
   }
 
   const tinygltf::Model& model_;
   const std::string& context_;
+  const bool merge_;
   Scene scene_;
   std::vector<bool> visited_;
   uint64_t skipped_primitives_ = 0;
 };
 
 Scene loadGltfBytes(std::span<const uint8_t> bytes, const std::string& context, bool binary, bool files_allowed,
-                    const std::string& base_dir) {
+                    const std::string& base_dir, bool merge) {
   if (bytes.size() >= kMaxFileBytes) throw SceneError(context + ": file too large for glTF (" +
                                                        std::to_string(bytes.size()) + " bytes)");
   if (binary) {
@@ -470,26 +463,27 @@ Scene loadGltfBytes(std::span<const uint8_t> bytes, const std::string& context, 
     }
   } catch (const std::exception& e) {
     // nlohmann::json and std containers inside tinygltf may throw on odd input.
-    throw SceneError(context + ": malformed glTF: " + oneLine(e.what()));
+    // tinygltf's messages may quote a whole data URI: 200 characters are plenty.
+    throw SceneError(context + ": malformed glTF: " + oneLineMessage(e.what(), 200));
   }
-  if (!ok) throw SceneError(context + ": malformed glTF: " + oneLine(err));
-  return GltfBuilder(model, context).build();
+  if (!ok) throw SceneError(context + ": malformed glTF: " + oneLineMessage(err, 200));
+  return GltfBuilder(model, context, merge).build();
 }
 
 }  // namespace
 
-Scene loadGltfFromMemory(std::span<const uint8_t> bytes, const std::string& context, bool binary) {
-  return loadGltfBytes(bytes, context, binary, /*files_allowed=*/false, "");
+Scene loadGltfFromMemory(std::span<const uint8_t> bytes, const std::string& context, bool binary, bool merge) {
+  return loadGltfBytes(bytes, context, binary, /*files_allowed=*/false, "", merge);
 }
 
-Scene loadGltf(const std::string& path) {
+Scene loadGltf(const std::string& path, bool merge) {
   const std::vector<uint8_t> bytes = readFileBytes(path);
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  ext = asciiLower(ext);
   const bool binary = ext == ".glb";
   std::string dir = std::filesystem::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  return loadGltfBytes(bytes, path, binary, /*files_allowed=*/true, dir);
+  return loadGltfBytes(bytes, path, binary, /*files_allowed=*/true, dir, merge);
 }
 
 }  // namespace walkvis

@@ -6,7 +6,8 @@
 // reports no line numbers) and keeps positions in float, which cannot hold the 1e6-with-1e-3
 // hard case. Every malformed record therefore gets a one-line SceneError naming file and line.
 // Material libraries are read with tinyobjloader's MTL parser; only the diffuse colour is used.
-// Records a walkthrough does not need (vt, vn, g, o, s, l, p, curves) are skipped.
+// Records a walkthrough does not need (vt, vn, s, l, p, curves) are skipped. Each `o` or `g`
+// record starts a new object for face merging (mesh_merge.h); without any, the file is one object.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -23,6 +24,7 @@
 #include <tiny_obj_loader.h>
 
 #include "scenes/loaders.h"
+#include "scenes/mesh_merge.h"
 #include "scenes/scene.h"
 
 namespace walkvis {
@@ -32,6 +34,7 @@ struct ObjFace {
   size_t line = 0;
   std::vector<int64_t> indices;  // 0-based, already resolved and range-checked
   int material = -1;             // index into the material list, -1 for none
+  uint32_t object = 0;           // counts the `o`/`g` records before it
 };
 
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f'; }
@@ -135,6 +138,7 @@ class ObjParser {
       ObjFace face;
       face.line = line_;
       face.material = material_;
+      face.object = object_;
       const size_t n = tok.size() - 1;
       if (n < 3) fail("face with " + std::to_string(n) + " vertices (needs at least 3)");
       for (size_t i = 1; i < tok.size(); ++i) face.indices.push_back(corner(tok[i]));
@@ -147,6 +151,8 @@ class ObjParser {
         material_names_.push_back(name);
       }
       material_ = it->second;
+    } else if (cmd == "o" || cmd == "g") {
+      ++object_;
     } else if (cmd == "mtllib") {
       for (size_t i = 1; i < tok.size(); ++i) mtllibs_.emplace_back(tok[i]);
     }
@@ -196,6 +202,7 @@ class ObjParser {
   size_t texcoords_ = 0;
   size_t normals_ = 0;
   int material_ = -1;
+  uint32_t object_ = 0;
 
  public:
   std::vector<glm::dvec3> vertices_;
@@ -239,7 +246,8 @@ std::map<std::string, uint32_t> readMaterials(const std::vector<std::string>& li
   return colors;
 }
 
-Scene buildObj(std::string_view text, const std::string& context, const std::filesystem::path* mtl_dir) {
+Scene buildObj(std::string_view text, const std::string& context, const std::filesystem::path* mtl_dir,
+               bool merge) {
   ObjParser parser(text, context);
   parser.parse();
   if (parser.faces_.empty()) {
@@ -262,31 +270,43 @@ Scene buildObj(std::string_view text, const std::string& context, const std::fil
       scene.report.notes.push_back(std::to_string(unknown) + " material(s) not found in the material libraries");
     }
   }
-  std::vector<glm::dvec3> verts;
-  for (const ObjFace& face : parser.faces_) {
-    verts.clear();
-    for (int64_t i : face.indices) verts.push_back(parser.vertices_[static_cast<size_t>(i)]);
-    const auto next_id = static_cast<uint32_t>(scene.face_colors.size());
-    uint32_t color = faceColor(next_id);
-    if (face.material >= 0 && material_colors[static_cast<size_t>(face.material)]) {
-      color = *material_colors[static_cast<size_t>(face.material)];
+  // One object per run of faces between `o`/`g` records, in file order, so input face i of the
+  // file is entry i of report.input_to_face.
+  std::vector<uint32_t> indices, sizes, colors;
+  for (size_t start = 0; start < parser.faces_.size();) {
+    size_t end = start;
+    indices.clear();
+    sizes.clear();
+    colors.clear();
+    while (end < parser.faces_.size() && parser.faces_[end].object == parser.faces_[start].object) {
+      const ObjFace& face = parser.faces_[end];
+      for (int64_t i : face.indices) indices.push_back(static_cast<uint32_t>(i));
+      sizes.push_back(static_cast<uint32_t>(face.indices.size()));
+      uint32_t color = kFaceColorById;
+      if (face.material >= 0 && material_colors[static_cast<size_t>(face.material)]) {
+        color = *material_colors[static_cast<size_t>(face.material)];
+      }
+      colors.push_back(color);
+      ++end;
     }
-    addFace(scene, verts, color, context + ":" + std::to_string(face.line));
+    const MeshObjectInput object{parser.vertices_, indices, sizes, colors};
+    addMeshObject(scene, object, merge, context + ":" + std::to_string(parser.faces_[start].line));
+    start = end;
   }
   return scene;
 }
 
 }  // namespace
 
-Scene loadObjFromMemory(std::string_view text, const std::string& context) {
-  return buildObj(text, context, nullptr);
+Scene loadObjFromMemory(std::string_view text, const std::string& context, bool merge) {
+  return buildObj(text, context, nullptr, merge);
 }
 
-Scene loadObj(const std::string& path) {
+Scene loadObj(const std::string& path, bool merge) {
   const std::vector<uint8_t> bytes = readFileBytes(path);
   const std::string text(bytes.begin(), bytes.end());
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  return buildObj(text, path, &dir);
+  return buildObj(text, path, &dir, merge);
 }
 
 }  // namespace walkvis

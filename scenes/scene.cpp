@@ -83,7 +83,7 @@ Plane newellPlane(std::span<const glm::dvec3> v) {
   Plane plane;
   if (v.size() < 3) return Plane{glm::dvec3(0.0), 0.0};
   // A face whose vertices share one y is exactly horizontal: give it an exact normal so that
-  // floors and ceilings never need a test on a height plane (DESIGN.md, PFD tree).
+  // floors and ceilings never need a test on a height plane (docs/DESIGN.md, "PFD tree").
   bool flat = true;
   for (const auto& p : v) flat = flat && p.y == v[0].y;
   glm::dvec3 n(0.0), c(0.0);
@@ -295,6 +295,23 @@ void deriveFloorLevels(Scene& scene) {
   }
 }
 
+void transformScene(Scene& scene, bool z_up, double scale) {
+  // z-up to y-up is a permutation with one negation, exact in doubles; a scale rounds each
+  // coordinate once, and planes are scaled the same way (n is unchanged by a uniform scale).
+  const auto point = [&](const glm::dvec3& p) {
+    const glm::dvec3 q = z_up ? glm::dvec3(p.x, p.z, -p.y) : p;
+    return q * scale;
+  };
+  for (auto& v : scene.vertices) v = point(v);
+  for (auto& p : scene.polygons) {
+    p.plane.n = z_up ? glm::dvec3(p.plane.n.x, p.plane.n.z, -p.plane.n.y) : p.plane.n;
+    p.plane.d *= scale;
+  }
+  if (scene.start_eye != glm::dvec3(0.0)) scene.start_eye = point(scene.start_eye);
+  scene.levels.clear();
+  scene.connections.clear();
+}
+
 void placeStartEye(Scene& scene) {
   for (auto& level : scene.levels) {
     level.walkable_area = 0.0;
@@ -324,10 +341,23 @@ void placeStartEye(Scene& scene) {
     scene.start_eye.y = best->floor_y + scene.eye_height;
     return;
   }
-  const FloorLevel& low = scene.levels.front();
+  // The lowest level that has a walkable piece (a loader may keep a level without one).
+  const FloorLevel* low = nullptr;
+  for (const auto& level : scene.levels) {
+    if (!level.walkable.empty()) {
+      low = &level;
+      break;
+    }
+  }
+  if (!low) {
+    const Bounds b = sceneBounds(scene);
+    scene.start_eye = glm::dvec3(0.5 * (b.lo.x + b.hi.x), scene.levels.front().floor_y + scene.eye_height,
+                                 0.5 * (b.lo.z + b.hi.z));
+    return;
+  }
   const std::vector<glm::dvec2>* largest = nullptr;
   double largest_area = -1.0;
-  for (const auto& piece : low.walkable) {
+  for (const auto& piece : low->walkable) {
     const double a = -signedAreaXz(piece);
     if (a > largest_area) {
       largest_area = a;
@@ -337,7 +367,7 @@ void placeStartEye(Scene& scene) {
   glm::dvec2 c(0.0);
   for (const auto& p : *largest) c += p;
   c /= static_cast<double>(largest->size());
-  scene.start_eye = glm::dvec3(c.x, low.floor_y + scene.eye_height, c.y);
+  scene.start_eye = glm::dvec3(c.x, low->floor_y + scene.eye_height, c.y);
 }
 
 Bounds sceneBounds(const Scene& scene) {

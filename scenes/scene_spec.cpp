@@ -9,16 +9,12 @@
 #include "scenes/generators.h"
 #include "scenes/loaders.h"
 #include "scenes/scene.h"
+#include "scenes/walkable.h"
 
 namespace walkvis {
 namespace {
 
 constexpr const char* kDoomWadDir = "/usr/share/games/doom";
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -66,6 +62,25 @@ Scene generate(const std::string& spec) {
 }
 
 }  // namespace
+
+std::string asciiLower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+std::string oneLineMessage(const std::string& text, size_t max_chars) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\n' || c == '\r') {
+      if (!out.empty() && out.back() != ' ') out += "; ";
+    } else if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+  if (out.size() > max_chars) out = out.substr(0, max_chars) + "...";
+  return out.empty() ? std::string("unknown error") : out;
+}
 
 GeneratorParams::GeneratorParams(std::string generator, std::map<std::string, std::string> values)
     : generator_(std::move(generator)), values_(std::move(values)) {}
@@ -115,24 +130,39 @@ void GeneratorParams::checkAllUsed() const {
 }
 
 Scene loadScene(const std::string& spec, const LoadOptions& options) {
+  if (!options.loader.empty() && options.loader != "assimp") {
+    throw SceneError(spec + ": unknown loader '" + options.loader + "' (expected assimp, or none for the default)");
+  }
+  if (options.up_axis != 0 && options.up_axis != 'y' && options.up_axis != 'z') {
+    throw SceneError(spec + ": the up axis must be y or z");
+  }
+  if (options.unit_scale == 0.0 || !std::isfinite(options.unit_scale)) {
+    throw SceneError(spec + ": the unit scale must be a positive finite number");
+  }
+  const std::string& floors = options.floors;
+  if (!floors.empty() && floors != "faces" && floors != "navmesh") {
+    throw SceneError(spec + ": unknown floor method '" + floors + "' (expected faces or navmesh)");
+  }
   Scene scene;
   double default_eye = 1.7;
+  bool wad = false;
+  bool mesh_file = false;  // OBJ, glTF or assimp: floors from the navmesh by default
+  bool native_file = false;  // the project's own OBJ and glTF loaders: up axis and units applied here
   if (spec.rfind("gen:", 0) == 0) {
     scene = generate(spec);
+    // The furnished building generators are meshes as an architect's tool would export them.
+    const std::string name = spec.substr(4, spec.find('?') == std::string::npos ? std::string::npos : spec.find('?') - 4);
+    mesh_file = name == "table_room" || name == "house" || name == "ramp";
   } else {
     std::string path = spec;
     std::string map;
     const size_t colon = spec.rfind(':');
-    if (colon != std::string::npos && endsWith(lower(spec.substr(0, colon)), ".wad")) {
+    if (colon != std::string::npos && endsWith(asciiLower(spec.substr(0, colon)), ".wad")) {
       path = spec.substr(0, colon);
       map = spec.substr(colon + 1);
     }
-    const std::string ext = lower(std::filesystem::path(path).extension().string());
-    if (ext == ".obj") {
-      scene = loadObj(path);
-    } else if (ext == ".gltf" || ext == ".glb") {
-      scene = loadGltf(path);
-    } else if (ext == ".wad") {
+    const std::string ext = asciiLower(std::filesystem::path(path).extension().string());
+    if (ext == ".wad") {
       path = resolveWad(path);
       if (map.empty()) {
         std::string names;
@@ -143,10 +173,30 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
       }
       scene = loadWadMap(path, map);
       default_eye = 41.0;
+      wad = true;
+    } else if (options.loader == "assimp") {
+      scene = loadAssimp(path, options);
+      mesh_file = true;
+    } else if (ext == ".obj") {
+      scene = loadObj(path, options.merge_faces);
+      mesh_file = native_file = true;
+    } else if (ext == ".gltf" || ext == ".glb") {
+      scene = loadGltf(path, options.merge_faces);
+      mesh_file = native_file = true;
+    } else if (!ext.empty() && assimpReadsExtension(ext)) {
+      scene = loadAssimp(path, options);
+      mesh_file = true;
     } else {
       throw SceneError(spec + ": unknown scene format '" + ext +
-                       "' (expected .obj, .gltf, .glb, FILE.wad:MAP or gen:NAME)");
+                       "' (expected .obj, .gltf, .glb, FILE.wad:MAP, gen:NAME, or a format assimp reads: "
+                       ".ifc, .fbx, .dae, .3ds, .blend, .ply, .stl, .off, ...)");
     }
+  }
+  if (native_file && (options.up_axis == 'z' || options.unit_scale > 0.0)) {
+    transformScene(scene, options.up_axis == 'z', options.unit_scale > 0.0 ? options.unit_scale : 1.0);
+    scene.report.notes.push_back(std::string("up axis ") + (options.up_axis == 'z' ? "z (turned to y)" : "y") +
+                                 ", unit scale " + std::to_string(options.unit_scale > 0.0 ? options.unit_scale : 1.0) +
+                                 " (given on the command line)");
   }
   if (scene.polygons.empty()) {
     const uint64_t dropped = scene.report.dropped_degenerate + scene.report.dropped_zero_area;
@@ -159,7 +209,14 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
   } else if (default_eye == 41.0) {
     scene.eye_height = default_eye;
   }
-  if (scene.levels.empty()) deriveFloorLevels(scene);
+  // WAD maps keep their exact sector floors unless asked; mesh files take the navmesh's floors;
+  // generators keep the levels they made, or every upward face height.
+  const bool navmesh = floors == "navmesh" || (floors.empty() && mesh_file && scene.levels.empty());
+  if (navmesh) {
+    deriveWalkableLevels(scene, options.walkable);
+  } else if (floors == "faces" || scene.levels.empty()) {
+    if (!wad || floors == "faces") deriveFloorLevels(scene);
+  }
   placeStartEye(scene);
   return scene;
 }

@@ -1,10 +1,12 @@
 // Walking physics (movement.h): no pushing through a closed wall, however hard or from wherever;
 // the eye follows the floor; steps up at most a step height, drops down any height; slides along
 // walls; switches levels on the stairs of a Freedoom map.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <set>
+#include <string>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -222,6 +224,97 @@ TEST(Movement, FreedoomStairsSwitchLevels) {
   EXPECT_GT(ups, 0);
   EXPECT_GT(downs, 0);
   EXPECT_GE(levels.size(), 3u);
+}
+
+
+// ---- Connections (walkable.h): stairs and ramps climbed patch by patch ----
+
+Scene navmeshScene(const std::string& spec) {
+  LoadOptions options;
+  options.floors = "navmesh";
+  return loadScene(spec, options);
+}
+
+// Walks from (x, z) along +x in steps of `step` up to x_end; returns the last state and checks on
+// the way that the eye always stands on a floor (never rises more than a step at once).
+WalkState walkAlongX(const Walker& walker, const Scene& scene, glm::dvec2 start, double x_end, double step) {
+  WalkState s = walker.place({start.x, scene.eye_height, start.y});
+  EXPECT_EQ(s.level, 0);
+  for (int i = 0; i < 10000 && s.eye.x < x_end; ++i) {
+    const WalkState next = walker.move(s, {step, 0.0});
+    EXPECT_LE(next.eye.y - s.eye.y, walker.stepHeight() + 1e-9);
+    if (next.eye.x == s.eye.x) break;  // stuck
+    s = next;
+  }
+  return s;
+}
+
+TEST(Movement, ClimbsTheHouseStairToTheUpperLevel) {
+  const Scene scene = navmeshScene("gen:house");
+  ASSERT_EQ(scene.levels.size(), 2u);
+  ASSERT_EQ(scene.connections.size(), 1u);
+  const BspTree bsp = buildBsp(scene);
+  const Walker walker(scene, bsp);
+  // The stair rises along +x from x = 1 to 5.2 against the z = 0 wall, 1.2 m wide.
+  const WalkState top = walkAlongX(walker, scene, {0.6, 0.6}, 6.5, 0.05);
+  EXPECT_EQ(top.level, 1);
+  EXPECT_GT(top.eye.x, 6.0);
+  EXPECT_DOUBLE_EQ(top.eye.y, scene.levels[1].floor_y + scene.eye_height);
+  // Half way up the eye is on a tread (a patch: level -1) at a tread's height.
+  WalkState mid = walker.place({3.0, 10.0, 0.6});
+  EXPECT_EQ(mid.level, -1);
+  EXPECT_NEAR(mid.eye.y - scene.eye_height, 3.0 / 16.0 * 8.0, 1e-9);  // tread 8 of 15 (x in [2.96, 3.24])
+  // And back down: walking along -x from the upper floor ends on the ground level.
+  WalkState s = top;
+  for (int i = 0; i < 400 && s.eye.x > 0.6; ++i) s = walker.move(s, {-0.05, 0.0});
+  EXPECT_EQ(s.level, 0);
+}
+
+TEST(Movement, ClimbsTheRampToTheUpperFloor) {
+  const Scene scene = navmeshScene("gen:ramp");
+  ASSERT_EQ(scene.levels.size(), 2u);
+  const BspTree bsp = buildBsp(scene);
+  const Walker walker(scene, bsp);
+  double last_y = 0.0;
+  WalkState s = walker.place({1.0, scene.eye_height, 2.0});
+  ASSERT_EQ(s.level, 0);
+  bool on_ramp = false;
+  for (int i = 0; i < 400 && s.eye.x < 9.0; ++i) {
+    s = walker.move(s, {0.05, 0.0});
+    EXPECT_GE(s.eye.y, last_y - 1e-12);  // up the ramp, never down
+    last_y = s.eye.y;
+    if (s.level < 0) {
+      on_ramp = true;
+      // On the ramp (x from 4 to 7, rising 0.9) the eye follows its plane.
+      EXPECT_NEAR(s.eye.y - scene.eye_height, std::clamp((s.eye.x - 4.0) * 0.3, 0.0, 0.9), 1e-9);
+    }
+  }
+  EXPECT_TRUE(on_ramp);
+  EXPECT_EQ(s.level, 1);
+  EXPECT_DOUBLE_EQ(s.eye.y, 0.9 + scene.eye_height);
+}
+
+TEST(Movement, NeverReachesTheTableTop) {
+  const Scene scene = navmeshScene("gen:table_room");
+  ASSERT_EQ(scene.levels.size(), 1u);
+  const BspTree bsp = buildBsp(scene);
+  const Walker walker(scene, bsp);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), len(0.01, 0.5);
+  WalkState s = walker.place(scene.start_eye);
+  ASSERT_EQ(s.level, 0);
+  int moved = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double a = angle(rng), l = len(rng);
+    const WalkState next = walker.move(s, {l * std::sin(a), l * std::cos(a)});
+    if (next.eye != s.eye) ++moved;
+    s = next;
+    ASSERT_EQ(s.level, 0);
+    ASSERT_EQ(s.eye.y, scene.eye_height);
+    // The table (1.6 x 0.9 m, centred in the 6 x 5 room) is never under the eye.
+    ASSERT_FALSE(std::abs(s.eye.x - 3.0) < 0.8 && std::abs(s.eye.z - 2.5) < 0.45);
+  }
+  EXPECT_GT(moved, 10000);
 }
 
 }  // namespace

@@ -92,7 +92,7 @@ TEST(AddFace, DegenerateAndZeroAreaFacesAreDroppedAndCounted) {
 
 TEST(AddFace, SliverOfAreaOneBillionthIsKept) {
   Scene s;
-  // A 1 × 1e-9 triangle: thin, but real (DESIGN.md hard cases).
+  // A 1 × 1e-9 triangle: thin, but real (docs/DESIGN.md, "Hard cases").
   const glm::dvec3 sliver[] = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-9, 0}};
   addFace(s, sliver, 0, "t");
   EXPECT_EQ(s.polygons.size(), 1u);

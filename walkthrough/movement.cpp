@@ -1,6 +1,7 @@
 // Walking physics: segment and ball queries against the walls through the BSP tree (Fuchs, Kedem,
 // Naylor 1980: a query shape descends only into the half-spaces it reaches, as in BSP ray
-// tracing, Naylor & Thibault 1986), and a grid over the floor levels' walkable pieces.
+// tracing, Naylor & Thibault 1986), and a grid over the floor levels' walkable pieces and the
+// connections' patches (stairs and ramps, each on its own plane).
 #include "walkthrough/movement.h"
 
 #include <algorithm>
@@ -57,23 +58,33 @@ Walker::Walker(const Scene& scene, const BspTree& bsp, const MoveOptions& option
 
   double total = 0.0;
   double lx = std::numeric_limits<double>::infinity(), lz = lx, hx = -lx, hz = -lx;
-  for (uint32_t l = 0; l < scene.levels.size(); ++l) {
-    const auto& pieces = scene.levels[l].walkable;
-    for (uint32_t i = 0; i < pieces.size(); ++i) {
-      if (pieces[i].size() < 3) continue;
-      Piece p{l, i, pieces[i][0].x, pieces[i][0].y, pieces[i][0].x, pieces[i][0].y};
-      double area2 = 0.0;
-      for (size_t k = 0; k < pieces[i].size(); ++k) {
-        const glm::dvec2 u = pieces[i][k], w = pieces[i][(k + 1) % pieces[i].size()];
-        p.lo_x = std::min(p.lo_x, u.x), p.hi_x = std::max(p.hi_x, u.x);
-        p.lo_z = std::min(p.lo_z, u.y), p.hi_z = std::max(p.hi_z, u.y);
-        area2 += u.x * w.y - w.x * u.y;
-      }
-      lx = std::min(lx, p.lo_x), hx = std::max(hx, p.hi_x), lz = std::min(lz, p.lo_z), hz = std::max(hz, p.hi_z);
-      pieces_.push_back(p);
+  const auto addPiece = [&](const std::vector<glm::dvec2>& ring, uint32_t owner, uint32_t index, bool patch) {
+    if (ring.size() < 3) return;
+    Piece p{owner, index, ring[0].x, ring[0].y, ring[0].x, ring[0].y, patch};
+    double area2 = 0.0;
+    for (size_t k = 0; k < ring.size(); ++k) {
+      const glm::dvec2 u = ring[k], w = ring[(k + 1) % ring.size()];
+      p.lo_x = std::min(p.lo_x, u.x), p.hi_x = std::max(p.hi_x, u.x);
+      p.lo_z = std::min(p.lo_z, u.y), p.hi_z = std::max(p.hi_z, u.y);
+      area2 += u.x * w.y - w.x * u.y;
+    }
+    lx = std::min(lx, p.lo_x), hx = std::max(hx, p.hi_x), lz = std::min(lz, p.lo_z), hz = std::max(hz, p.hi_z);
+    pieces_.push_back(p);
+    if (!patch) {
       total += std::abs(area2) * 0.5;
       piece_area_cumulative_.push_back(total);
     }
+  };
+  for (uint32_t l = 0; l < scene.levels.size(); ++l) {
+    const auto& pieces = scene.levels[l].walkable;
+    for (uint32_t i = 0; i < pieces.size(); ++i) addPiece(pieces[i], l, i, false);
+  }
+  level_pieces_ = pieces_.size();
+  // Patches on planes too steep to stand on (n.y not positive) carry no floor height.
+  for (uint32_t c = 0; c < scene.connections.size(); ++c) {
+    const auto& patches = scene.connections[c].patches;
+    for (uint32_t i = 0; i < patches.size(); ++i)
+      if (patches[i].plane.n.y > 0.0) addPiece(patches[i].piece, c, i, true);
   }
   if (pieces_.empty()) return;
   // About two cells per piece, at most 512 per side: a few pieces per cell on Freedoom maps.
@@ -102,9 +113,19 @@ Walker::Walker(const Scene& scene, const BspTree& bsp, const MoveOptions& option
   }
 }
 
+const std::vector<glm::dvec2>& Walker::ring(const Piece& p) const {
+  return p.patch ? scene_.connections[p.level].patches[p.index].piece : scene_.levels[p.level].walkable[p.index];
+}
+
+double Walker::pieceFloor(const Piece& p, double x, double z) const {
+  if (!p.patch) return scene_.levels[p.level].floor_y;
+  const Plane& pl = scene_.connections[p.level].patches[p.index].plane;
+  return (pl.d - pl.n.x * x - pl.n.z * z) / pl.n.y;
+}
+
 bool Walker::insidePiece(const Piece& p, double x, double z) const {
   if (x < p.lo_x - tol_ || x > p.hi_x + tol_ || z < p.lo_z - tol_ || z > p.hi_z + tol_) return false;
-  const auto& ring = scene_.levels[p.level].walkable[p.index];
+  const auto& ring = this->ring(p);
   bool neg = false, pos = false;
   for (size_t k = 0; k < ring.size(); ++k) {
     const glm::dvec2 u = ring[k], w = ring[(k + 1) % ring.size()];
@@ -117,16 +138,23 @@ bool Walker::insidePiece(const Piece& p, double x, double z) const {
   return !(neg && pos);
 }
 
-std::optional<uint32_t> Walker::levelUnder(double x, double z, double max_floor_y) const {
+std::optional<size_t> Walker::gridCell(double x, double z) const {
   if (pieces_.empty() || !std::isfinite(x) || !std::isfinite(z)) return std::nullopt;
   const double fx = (x - grid_x0_) / cell_, fz = (z - grid_z0_) / cell_;
   if (fx < -1.0 || fz < -1.0 || fx > grid_nx_ + 1.0 || fz > grid_nz_ + 1.0) return std::nullopt;
   const int cx = std::clamp(static_cast<int>(std::floor(fx)), 0, grid_nx_ - 1);
   const int cz = std::clamp(static_cast<int>(std::floor(fz)), 0, grid_nz_ - 1);
-  const size_t c = static_cast<size_t>(cz) * grid_nx_ + cx;
+  return static_cast<size_t>(cz) * grid_nx_ + cx;
+}
+
+std::optional<uint32_t> Walker::levelUnder(double x, double z, double max_floor_y) const {
+  const std::optional<size_t> cell = gridCell(x, z);
+  if (!cell) return std::nullopt;
+  const size_t c = *cell;
   std::optional<uint32_t> best;
   for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
     const Piece& p = pieces_[cell_pieces_[k]];
+    if (p.patch) continue;
     const double fy = scene_.levels[p.level].floor_y;
     if (fy > max_floor_y) continue;
     if (best && scene_.levels[*best].floor_y >= fy) continue;
@@ -135,14 +163,30 @@ std::optional<uint32_t> Walker::levelUnder(double x, double z, double max_floor_
   return best;
 }
 
+std::optional<Walker::Floor> Walker::floorUnder(double x, double z, double max_floor_y) const {
+  const std::optional<size_t> cell = gridCell(x, z);
+  if (!cell) return std::nullopt;
+  const size_t c = *cell;
+  std::optional<Floor> best;
+  for (uint32_t k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+    const Piece& p = pieces_[cell_pieces_[k]];
+    const double fy = pieceFloor(p, x, z);
+    if (fy > max_floor_y) continue;
+    const int level = p.patch ? -1 : static_cast<int>(p.level);
+    if (best && (best->y > fy || (best->y == fy && (best->level >= 0 || level < 0)))) continue;
+    if (insidePiece(p, x, z)) best = Floor{fy, level};
+  }
+  return best;
+}
+
 std::optional<std::pair<glm::dvec2, uint32_t>> Walker::randomWalkablePoint(std::mt19937_64& rng) const {
-  if (pieces_.empty() || !(piece_area_cumulative_.back() > 0.0)) return std::nullopt;
+  if (level_pieces_ == 0 || !(piece_area_cumulative_.back() > 0.0)) return std::nullopt;
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double pick = unit(rng) * piece_area_cumulative_.back();
   const size_t i = std::min<size_t>(
       std::upper_bound(piece_area_cumulative_.begin(), piece_area_cumulative_.end(), pick) -
           piece_area_cumulative_.begin(),
-      pieces_.size() - 1);
+      level_pieces_ - 1);
   const auto& ring = scene_.levels[pieces_[i].level].walkable[pieces_[i].index];
   // A fan triangle by area, then a uniform point in it.
   std::vector<double> cum;
@@ -211,9 +255,9 @@ bool Walker::segmentClear(const glm::dvec3& a, const glm::dvec3& b, double radiu
 }
 
 WalkState Walker::place(const glm::dvec3& eye) const {
-  const auto level = levelUnder(eye.x, eye.z, eye.y - scene_.eye_height + step_ + tol_);
-  if (!level) return {eye, -1};
-  return {{eye.x, scene_.levels[*level].floor_y + scene_.eye_height, eye.z}, static_cast<int>(*level)};
+  const auto floor = floorUnder(eye.x, eye.z, eye.y - scene_.eye_height + step_ + tol_);
+  if (!floor) return {eye, -1};
+  return {{eye.x, floor->y + scene_.eye_height, eye.z}, floor->level};
 }
 
 std::optional<WalkState> Walker::tryMove(const WalkState& from, const glm::dvec2& d) const {
@@ -222,12 +266,16 @@ std::optional<WalkState> Walker::tryMove(const WalkState& from, const glm::dvec2
   if (!segmentClear(from.eye, mid, radius_)) return std::nullopt;
   const double floor_now =
       from.level >= 0 ? scene_.levels[from.level].floor_y : from.eye.y - scene_.eye_height;
-  const auto level = levelUnder(mid.x, mid.z, floor_now + step_ + tol_);
-  if (!level) {
-    if (from.level >= 0) return std::nullopt;  // walking off the walkable region
+  const auto floor = floorUnder(mid.x, mid.z, floor_now + step_ + tol_);
+  if (!floor) {
+    // Walking off the walkable region: refused when standing on a level or a patch (a floor at
+    // the eye's own height under it); in the air the eye keeps its height.
+    if (from.level >= 0) return std::nullopt;
+    const auto under = floorUnder(from.eye.x, from.eye.z, floor_now + tol_);
+    if (under && under->y >= floor_now - tol_) return std::nullopt;
     return WalkState{mid, -1};
   }
-  const WalkState to{{mid.x, scene_.levels[*level].floor_y + scene_.eye_height, mid.z}, static_cast<int>(*level)};
+  const WalkState to{{mid.x, floor->y + scene_.eye_height, mid.z}, floor->level};
   // Vertically only crossings matter: stepping up or dropping down beside a riser is the point.
   if (to.eye.y != mid.y && !segmentClear(mid, to.eye, 0.0)) return std::nullopt;
   return to;

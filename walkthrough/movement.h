@@ -1,7 +1,9 @@
 // Walking physics for the window and the automatic tour: the eye stays at eye height above the
-// floor under it, steps up at most a step height onto another floor level (switching the level,
-// hence the tree the frame uses), drops down any height, never crosses a wall and keeps a radius
-// away from walls it approaches, sliding along them.
+// floor under it, steps up at most a step height onto another floor level or onto a connection
+// (Scene::connections: stair treads, ramps), switching the level (hence the tree the frame uses;
+// -1 on a connection, where the frame uses the BSP order), drops down any height, never crosses a
+// wall and keeps a radius away from walls it approaches, sliding along them. The floor under a
+// point is the highest of the levels' floors and the connection patches' planes there.
 //
 // Walls are the fragments of the BSP whose plane is not horizontal (|n.y| < kWallMaxNormalY):
 // floors and ceilings are the floor levels' business. A move is a horizontal segment at the eye's
@@ -47,16 +49,17 @@ class Walker {
   double radius() const { return radius_; }
   double stepHeight() const { return step_; }
 
-  // The eye put onto the floor under its (x, z): the highest level there whose floor is at most
-  // eye.y − eye height + step height, at exactly floor_y + eye height. Unchanged with level -1
-  // when there is none.
+  // The eye put onto the floor under its (x, z): the highest level floor or connection patch there
+  // that is at most eye.y − eye height + step height, at exactly that floor + eye height (level -1
+  // on a patch). Unchanged with level -1 when there is none.
   WalkState place(const glm::dvec3& eye) const;
 
   // Moves by delta_xz (x, z) with collision and sliding: the full move when it is allowed, else
-  // the move slid along the blocking wall, else along x or z alone, else no move. On a level the
-  // new (x, z) must have a floor at most a step height above the current one (the highest such is
-  // taken). Off the walkable region (level -1) the eye moves at its height and lands on a floor
-  // reachable by a step down or up.
+  // the move slid along the blocking wall, else along x or z alone, else no move. Standing on a
+  // floor (a level, or a connection patch with level -1) the new (x, z) must have a floor at most
+  // a step height above the current one (the highest such is taken). Off the walkable region
+  // (level -1, no floor under the eye) the eye moves at its height and lands on a floor reachable
+  // by a step down or up.
   WalkState move(const WalkState& from, const glm::dvec2& delta_xz) const;
 
   // One step without sliding: nullopt when blocked (by a wall or by having no floor to go to).
@@ -69,17 +72,28 @@ class Walker {
 
   // The highest level containing (x, z) (boundary inclusive) with floor_y <= max_floor_y.
   std::optional<uint32_t> levelUnder(double x, double z, double max_floor_y) const;
+  // The highest floor at (x, z) at most max_floor_y: a level's (level index) or a connection
+  // patch's plane height there (level -1); a level wins a tie.
+  struct Floor {
+    double y;
+    int level;
+  };
+  std::optional<Floor> floorUnder(double x, double z, double max_floor_y) const;
   // A uniformly random point of the walkable region (all levels, by area) and its level; nullopt
   // for a scene without walkable area.
   std::optional<std::pair<glm::dvec2, uint32_t>> randomWalkablePoint(std::mt19937_64& rng) const;
 
  private:
   struct Piece {
-    uint32_t level;
-    uint32_t index;  // into levels[level].walkable
+    uint32_t level;  // for a patch: the connection's index
+    uint32_t index;  // into levels[level].walkable, or into connections[level].patches
     double lo_x, lo_z, hi_x, hi_z;
+    bool patch = false;
   };
   bool insidePiece(const Piece& p, double x, double z) const;
+  // The grid cell whose pieces may hold (x, z) (points just outside the grid clamp to its edge);
+  // nullopt far outside it or for no pieces.
+  std::optional<size_t> gridCell(double x, double z) const;
   bool wallBlocks(uint32_t fragment, const glm::dvec3& a, const glm::dvec3& b, double radius) const;
   bool blocks(int32_t node, const glm::dvec3& a, const glm::dvec3& b, double radius, glm::dvec3* blocker) const;
 
@@ -87,7 +101,11 @@ class Walker {
   const BspTree& bsp_;
   double radius_ = 0.0, step_ = 0.0;
   double tol_ = 0.0;  // 1e-9 of the scene's scale
-  std::vector<Piece> pieces_;
+  const std::vector<glm::dvec2>& ring(const Piece& p) const;
+  double pieceFloor(const Piece& p, double x, double z) const;
+
+  std::vector<Piece> pieces_;  // the levels' pieces first (level_pieces_ of them), then patches
+  size_t level_pieces_ = 0;
   std::vector<double> piece_area_cumulative_;
   // Uniform grid over the pieces' bounds: cell → piece indices.
   double grid_x0_ = 0.0, grid_z0_ = 0.0, cell_ = 1.0;

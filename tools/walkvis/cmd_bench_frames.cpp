@@ -24,7 +24,7 @@ struct FramesBenchArgs {
   std::string source;
   std::string scene;
   std::string hfd;
-  double eye_height = -1.0;
+  LoadOptions load;
   uint32_t frames = 120;
   std::string size = "320x240";
   uint32_t check_every = 10;
@@ -51,7 +51,7 @@ int runFramesBench(const FramesBenchArgs& args) {
     if (!args.json) std::fprintf(stderr, "%s\n", line.c_str());
   };
   WorldOptions base;
-  base.load.eye_height = args.eye_height;
+  base.load = args.load;
   base.scene = args.scene;
   // The source without culling (z-buffer) and with the exact region method (bsp, pfd); PFD trees
   // in memory when the source is a scene.
@@ -193,8 +193,7 @@ void addBenchFrames(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("source", args->source, "A scene or a tree file made by `walkvis build`")->required();
   sub->add_option("--scene", args->scene, "For a tree file: the scene it was built from (its colours)");
   sub->add_option("--hfd", args->hfd, "An HFD tree file of the same scene (`walkvis build --tree hfd`)");
-  sub->add_option("--eye-height", args->eye_height, "Eye height above the floor (scenes only)")
-      ->check(CLI::PositiveNumber);
+  addLoadOptions(*sub, args->load);
   sub->add_option("--frames", args->frames, "Frames of the automatic tour")->check(CLI::Range(1u, 100000u));
   sub->add_option("--size", args->size, "Image size WxH");
   sub->add_option("--check-every", args->check_every, "Compare ids with the z-buffer on every k-th frame")

@@ -16,7 +16,7 @@ namespace {
 struct RenderArgs {
   std::string source;
   std::string scene;
-  double eye_height = -1.0;
+  LoadOptions load;
   std::string path;
   uint32_t frames = 120;
   std::string size = "640x480";
@@ -39,7 +39,7 @@ int runRender(const RenderArgs& args) {
   const ImageSize size = parseImageSize(args.size, "--size");
   const ListCullMethod cull = parseListCullMethod(args.cull);
   WorldOptions options;
-  options.load.eye_height = args.eye_height;
+  options.load = args.load;
   options.scene = args.scene;
   options.cull = cull;
   options.objects = parseObjectSet(args.objects);
@@ -114,8 +114,7 @@ void addRenderCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("source", args->source, "A scene (model.obj, freedoom2.wad:MAP01, gen:office) or a tree file")
       ->required();
   sub->add_option("--scene", args->scene, "For a tree file: the scene it was built from (its colours)");
-  sub->add_option("--eye-height", args->eye_height, "Eye height above the floor (scenes only)")
-      ->check(CLI::PositiveNumber);
+  addLoadOptions(*sub, args->load);
   sub->add_option("--path", args->path, "Camera path CSV (time,x,y,z,yaw,pitch); default: the automatic tour");
   sub->add_option("--frames", args->frames, "Frames of the automatic tour (with --path: at most this many keys)")
       ->check(CLI::Range(1u, 1000000u));

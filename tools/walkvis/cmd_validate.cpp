@@ -1,11 +1,11 @@
 // walkvis validate SCENE|FILE [--order bsp|pfd|hfd] [--views N] [--seed S] [--size PIXELS]
 //                             [--zbits 16,24,32] [--json] [--diff-dir DIR] [--compare-bsp N]
 // Painter's images of a priority order and z-buffer images against exact ray casting, over eyes
-// sampled in the walkable regions, six 90° faces each (DESIGN.md "Validation and statistics").
+// sampled in the walkable regions, six 90° faces each (docs/DESIGN.md, "Validation and statistics").
 // On a tree file (walkvis build) the orders are the file's PFD or HFD trees (pfdQuery over the
 // view cell under the eye) or its BSP. --compare-bsp checks the tree order against the BSP
-// back-to-front order sequence by sequence instead of by images (DESIGN.md "PFD tree",
-// correctness).
+// back-to-front order sequence by sequence instead of by images (docs/DESIGN.md,
+// "PFD tree": correctness).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -248,9 +248,9 @@ int runValidate(const ValidateArgs& args) {
   Scene scene;
   if (tree_file) {
     file = loadTreeFile(args.scene.scene);
-    if (args.scene.eye_height >= 0.0 && args.scene.eye_height != file->eye_height)
+    if (args.scene.load.eye_height >= 0.0 && args.scene.load.eye_height != file->eye_height)
       throw SceneError(args.scene.scene + ": the trees were built for eye height " + std::to_string(file->eye_height) +
-                       "; rebuild them for --eye-height " + std::to_string(args.scene.eye_height));
+                       "; rebuild them for --eye-height " + std::to_string(args.scene.load.eye_height));
     if (args.order != "bsp" && args.order != treeKindName(file->kind))
       throw SceneError(args.scene.scene + ": holds " + std::string(treeKindName(file->kind)) + " trees, not " + args.order +
                        " (walkvis build --tree " + args.order + ")");

@@ -15,8 +15,7 @@ void addWalkCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("source", args->source, "A scene (model.obj, freedoom2.wad:MAP01, gen:office) or a tree file")
       ->required();
   sub->add_option("--scene", args->scene, "For a tree file: the scene it was built from (its colours)");
-  sub->add_option("--eye-height", args->eye_height, "Eye height above the floor (scenes only)")
-      ->check(CLI::PositiveNumber);
+  addLoadOptions(*sub, args->load);
   sub->add_option("--mode", args->mode, "zbuffer | bsp | pfd | hfd (default: the tree file's kind, else bsp)");
   sub->add_option("--cull", args->cull, "Backface method: none | polygon | mask | cluster | hierarchy | region");
   sub->add_option("--objects", args->objects,

@@ -14,11 +14,15 @@ namespace walkvis {
 // Set by a subcommand's parse callback; main runs it after parsing and returns its exit status.
 using CommandRunner = std::function<int()>;
 
-// The scene argument and --eye-height, shared by every command that takes a scene.
+// How a scene is loaded (--eye-height, --loader, --up, --unit-scale, --no-merge, --floors and the
+// walker's --agent-* sizes), shared by every command that loads a scene.
+void addLoadOptions(CLI::App& sub, LoadOptions& load);
+
+// The scene argument and the load options.
 struct SceneArgs {
   std::string scene = "gen:office";
-  double eye_height = -1.0;
-  LoadOptions loadOptions() const { return LoadOptions{eye_height}; }
+  LoadOptions load;
+  const LoadOptions& loadOptions() const { return load; }
 };
 void addSceneArgs(CLI::App& sub, SceneArgs& args, bool required = true);
 

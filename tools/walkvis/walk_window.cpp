@@ -152,7 +152,7 @@ std::string screenshotName(const std::string& dir, const char* stem, size_t inde
 int runWalk(const WalkArgs& args) {
   const ImageSize size = parseImageSize(args.size, "--size");
   WorldOptions options;
-  options.load.eye_height = args.eye_height;
+  options.load = args.load;
   options.scene = args.scene;
   options.cull = parseListCullMethod(args.cull);
   options.objects = parseObjectSet(args.objects);

@@ -5,12 +5,14 @@
 #include <cstdint>
 #include <string>
 
+#include "scenes/scene.h"
+
 namespace walkvis {
 
 struct WalkArgs {
   std::string source;              // scene spec or tree file
   std::string scene;               // for a tree file: the scene it was built from
-  double eye_height = -1.0;
+  LoadOptions load;                // how a scene (or the --scene of a tree file) is loaded
   std::string mode;                // zbuffer | bsp | pfd | hfd; empty: the source's best
   std::string cull = "none";
   std::string objects = "auto";    // mesh objects: auto | none | blob (mesh_object.h)

@@ -1,13 +1,17 @@
 // BSP tree: build wrapper (validation, statistics) and traversal.
 // Source: H. Fuchs, Z. M. Kedem, B. F. Naylor, "On visible surface generation by a priori tree
-// structures", SIGGRAPH 1980: back-to-front for an eye v is the far subtree, the node's
-// polygons, the near subtree; front-to-back is the reverse.
+// structures", SIGGRAPH 1980 [FuchsKedemNaylor1980]: back-to-front for an eye v is the far subtree,
+// the node's polygons, the near subtree; front-to-back is the reverse.
 #include "bsp/bsp.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <string>
+
+#include <glm/common.hpp>
 
 #include "bsp/bsp_internal.h"
 #include "bsp/exact_sign.h"
@@ -108,6 +112,44 @@ void traverse(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>&
 
 }  // namespace
 
+std::vector<uint8_t> detailPolygons(const Scene& scene, double detail_extent, uint64_t* detail_objects) {
+  std::vector<uint8_t> detail(scene.polygons.size(), 0);
+  if (detail_objects) *detail_objects = 0;
+  if (!(detail_extent > 0.0) || scene.face_object.empty()) return detail;
+  const auto objectOf = [&](const Polygon& p) -> std::optional<uint32_t> {
+    if (p.face_id >= scene.face_object.size()) return std::nullopt;
+    return scene.face_object[p.face_id];
+  };
+  uint32_t objects = 0;
+  for (uint32_t o : scene.face_object) objects = std::max(objects, o + 1);
+  std::vector<Bounds> box(objects);
+  std::vector<uint8_t> seen(objects, 0);
+  for (const Polygon& p : scene.polygons) {
+    const auto o = objectOf(p);
+    if (!o) continue;
+    for (const auto& v : scene.polygonVertices(p)) {
+      if (!seen[*o]) {
+        box[*o].lo = box[*o].hi = v;
+        seen[*o] = 1;
+      }
+      box[*o].lo = glm::min(box[*o].lo, v);
+      box[*o].hi = glm::max(box[*o].hi, v);
+    }
+  }
+  const double limit = detail_extent * scene.eye_height;
+  std::vector<uint8_t> is_detail(objects, 0);
+  for (uint32_t o = 0; o < objects; ++o) {
+    const glm::dvec3 e = box[o].hi - box[o].lo;
+    is_detail[o] = seen[o] && std::max({e.x, e.y, e.z}) < limit;
+    if (is_detail[o] && detail_objects) ++*detail_objects;
+  }
+  for (size_t i = 0; i < scene.polygons.size(); ++i) {
+    const auto o = objectOf(scene.polygons[i]);
+    detail[i] = o && is_detail[*o];
+  }
+  return detail;
+}
+
 BspTree buildBsp(const Scene& scene, const BspOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   validate(scene);
@@ -115,6 +157,9 @@ BspTree buildBsp(const Scene& scene, const BspOptions& options) {
   tree.stats.exact_fallbacks = detail::buildBspExact(scene, options, tree);
   tree.scene_hash = sceneHash(scene);
   computeStats(tree, scene.polygons.size());
+  const std::vector<uint8_t> detail = detailPolygons(scene, options.detail_extent, &tree.stats.detail_objects);
+  for (uint8_t d : detail) tree.stats.detail_polygons += d;
+  for (uint32_t p : tree.fragment_polygon) tree.stats.structure_fragments += !detail[p];
   tree.stats.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }

@@ -1,16 +1,17 @@
 // The exact BSP tree (Fuchs, Kedem, Naylor, "On visible surface generation by a priori tree
-// structures", SIGGRAPH 1980), built by autopartition, with back-to-front and front-to-back
-// traversal for an eye anywhere in space, statistics and a versioned, checksummed file format.
+// structures", SIGGRAPH 1980 [FuchsKedemNaylor1980]), built by autopartition, with back-to-front
+// and front-to-back traversal for an eye anywhere in space, statistics and a versioned, checksummed
+// file format.
 //
-// Exactness (DESIGN.md, hard cases). Every node plane is the plane of one input polygon, taken as
-// its double coefficients (n, d) read as exact rationals. Each fragment is represented exactly while
-// the tree is built: an input polygon's double vertices are projected exactly onto its own plane
-// (so every fragment is exactly planar), straddlers are split at exact plane/segment
-// intersections, and every vertex is classified against every plane exactly (bsp_build_cgal.cpp).
-// After the build only double approximations of the fragment vertices are kept, for drawing: the
-// ORDER was decided exactly. At query time the side of a double eye against a double plane is an
-// exact sign too (bsp/exact_sign.h). So no point or fragment is ever classified inconsistently,
-// however thin or nearly parallel the input.
+// Exactness (docs/DESIGN.md, "Hard cases" and "Numerics"). Every node plane is the plane of one
+// input polygon, taken as its double coefficients (n, d) read as exact rationals. Each fragment is
+// represented exactly while the tree is built: an input polygon's double vertices are projected
+// exactly onto its own plane (so every fragment is exactly planar), straddlers are split at exact
+// plane/segment intersections, and every vertex is classified against every plane exactly
+// (bsp_build_cgal.cpp). After the build only double approximations of the fragment vertices are
+// kept, for drawing: the ORDER was decided exactly. At query time the side of a double eye against
+// a double plane is an exact sign too (bsp/exact_sign.h). So no point or fragment is ever
+// classified inconsistently, however thin or nearly parallel the input.
 #pragma once
 
 #include <cstdint>
@@ -86,6 +87,19 @@ struct BspOptions {
   // freedoom2 MAP10 at horizontal_weight 0.5: 1.574 -> 1.462 (plain greedy 1.611 -> 1.517); mean
   // N/n over the 35 `bench bsp` scenes 1.233 -> 1.170, the offices unchanged (bsp_build_cgal.cpp).
   bool exact_heuristic_sides = true;
+  // Detail (the idea of Quake's detail brushes, made exact): an input object whose bounding box
+  // is small against a storey (furniture, frames, railings, stairs) must not split the structure
+  // (walls, floors, slabs) it stands in. With detail_extent > 0, every node whose set still holds a
+  // structural fragment takes its plane from a structural fragment; detail fragments are split by
+  // the structure where it crosses them, and their own planes order them only inside the cells the
+  // structure leaves. The tree is the same kind of exact autopartition, so every order stays exact.
+  // An object is detail when the largest side of its bounding box is below detail_extent × the
+  // scene's eye height. Scenes without objects (Scene::face_object empty) are all structure.
+  // 0 = every polygon is structure, the default: on the FZK-Haus IFC house (17,220 polygons in 294
+  // objects) least-crossed N/n is 3.660 with it off, 4.003 at 1 and 3.925 at 2 (walls come as
+  // objects too and the cuts that shatter the house are detail planes inside the rooms' cells),
+  // 3.614 at 4: not enough to earn a default (docs/DESIGN.md, "Real buildings").
+  double detail_extent = 0.0;
 };
 
 struct BspNode {
@@ -109,6 +123,9 @@ struct BspStats {
   double build_seconds = 0.0;   // wall time of buildBsp
   uint64_t bytes = 0;           // memory of the tree's arrays (vertices, fragments, nodes, indices)
   uint64_t exact_fallbacks = 0; // vertex classifications the double filter could not decide
+  uint64_t detail_objects = 0;  // input objects kept out of the structure (BspOptions::detail_extent)
+  uint64_t detail_polygons = 0; // their polygons (of input_polygons)
+  uint64_t structure_fragments = 0;  // fragments of structural polygons (the rest are detail)
 };
 
 struct BspTree {
@@ -127,6 +144,10 @@ struct BspTree {
     return {vertices.data() + fragments[f].first_vertex, fragments[f].vertex_count};
   }
 };
+
+// Per scene polygon, 1 when it belongs to a detail object (BspOptions::detail_extent), else 0; and the
+// number of detail objects.
+std::vector<uint8_t> detailPolygons(const Scene& scene, double detail_extent, uint64_t* detail_objects = nullptr);
 
 // Builds the tree over all polygons of the scene. Throws SceneError for a polygon whose plane is
 // not finite or has a zero normal (Scene's loaders never make one). Deterministic for given options.

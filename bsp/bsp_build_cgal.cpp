@@ -1,9 +1,10 @@
 // Autopartition BSP build with exact classification.
 // Source: H. Fuchs, Z. M. Kedem, B. F. Naylor, "On visible surface generation by a priori tree
-// structures", SIGGRAPH 1980 (autopartition: node plane = plane of one of its polygons, coplanar
-// polygons stay at the node, straddlers are split). Splitting-plane choice: least-crossed among a
-// few sampled candidates with a balance tie-break, or random-order autopartition (Paterson and
-// Yao, "Efficient binary space partitions for hidden-surface removal and solid modeling", 1990).
+// structures", SIGGRAPH 1980 [FuchsKedemNaylor1980] (autopartition: node plane = plane of one of
+// its polygons, coplanar polygons stay at the node, straddlers are split). Splitting-plane choice:
+// least-crossed among a few sampled candidates with a balance tie-break, or random-order
+// autopartition (Paterson and Yao, "Efficient binary space partitions for hidden-surface removal
+// and solid modeling", 1990 [PatersonYao1990]).
 //
 // Exactness and its cost. Node planes are the input polygons' double coefficients (n, d), read
 // as exact rationals. Fragment vertices are CGAL Epeck (lazy exact) points: an input vertex is
@@ -41,14 +42,14 @@
 // 14.1 -> 34.3, MAP26 11.3 -> 31.1) for N/n 1.611 -> 1.606. Split weights 5..1000, lookahead up
 // to 1,024 and seeds change N/n by < 0.03.
 //
-// Pilot method (choosePilot, Duin and Voss 1999): at nodes of >= pilot_min_set fragments and depth
-// <= pilot_depth_max the pilot_candidates best planes by the greedy score are each completed by a
-// greedy rollout (double approximation, count only) and the fewest total wins. MAP10: 1.611 ->
-// 1.602 (4 candidates, sets >= 512, depth <= 8), 1.574 (8, >= 64, <= 12 or <= 40), 1.583 (16,
-// >= 128, <= 40); CPU 0.65 s -> 3.0 s at (8, 64, 12). horizontal_fragment_weight (a crossed floor
-// or ceiling weighs w): w 0.5 1.662, 1.5 1.603, 2 1.613, 4 1.677; with the pilot, 1.5 gives 1.568.
-// Neither reaches the 1.5 target on MAP10. (All figures in this paragraph and the one before are
-// without exact_heuristic_sides; with it, see above.)
+// Pilot method (choosePilot, Duin and Voss 1999 [DuinVoss1999]): at nodes of >= pilot_min_set
+// fragments and depth <= pilot_depth_max the pilot_candidates best planes by the greedy score are
+// each completed by a greedy rollout (double approximation, count only) and the fewest total wins.
+// MAP10: 1.611 -> 1.602 (4 candidates, sets >= 512, depth <= 8), 1.574 (8, >= 64, <= 12 or <= 40),
+// 1.583 (16, >= 128, <= 40); CPU 0.65 s -> 3.0 s at (8, 64, 12). horizontal_fragment_weight (a
+// crossed floor or ceiling weighs w): w 0.5 1.662, 1.5 1.603, 2 1.613, 4 1.677; with the pilot, 1.5
+// gives 1.568. Neither reaches the 1.5 target on MAP10. (All figures in this paragraph and the one
+// before are without exact_heuristic_sides; with it, see above.)
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
 #include <CGAL/intersections.h>
@@ -210,6 +211,19 @@ class Builder {
     return static_cast<double>(pilot_work_) + estimate <= static_cast<double>(options_.pilot_work_max);
   }
   uint64_t randomBelow(uint64_t n) { return rng_() % n; }  // bias < n / 2^64: irrelevant here
+  // Whether fragment fi may give the plane of a node over `frags`: a detail fragment may not while
+  // a structural one is left (bsp.h, detail_extent). Sets candidates_restricted_ for the set.
+  void restrictCandidates(const std::vector<uint32_t>& frags) {
+    candidates_restricted_ = false;
+    if (detail_.empty()) return;
+    for (uint32_t fi : frags) {
+      if (!detail_[frags_[fi].poly]) {
+        candidates_restricted_ = true;
+        return;
+      }
+    }
+  }
+  bool candidate(uint32_t fi) const { return !candidates_restricted_ || !detail_[frags_[fi].poly]; }
 
   const Scene& scene_;
   const BspOptions& options_;
@@ -232,6 +246,9 @@ class Builder {
   uint64_t pilot_work_ = 0;  // fragments of all rollout node sets so far (bounded by pilot_work_max)
   uint64_t refined_ = 0;  // stored vertices rounded from the exact point
   double heuristic_tol_ = 0.0;
+  std::vector<uint8_t> detail_;  // per input polygon (detailPolygons); empty: all structure
+  bool candidates_restricted_ = false;
+  std::vector<uint32_t> structural_;  // scratch of chooseBySampling and the random heuristic
 };
 
 int Builder::classify(const Vtx& v, const NodePlane& p) {
@@ -342,7 +359,11 @@ void Builder::chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, 
   const size_t m = frags.size();
   const size_t words = (m + 63) / 64;
   reps_.clear();
+  size_t candidate_planes = 0;
+  // Candidates come first in reps_ so that [0, candidate_planes) are the planes a node may take.
+  for (int pass = 0; pass < 2; ++pass) {
   for (uint32_t fi : frags) {
+    if (candidate(fi) != (pass == 0)) continue;
     const Plane& pl = scene_.polygons[frags_[fi].poly].plane;
     bool seen = false;
     for (uint32_t r : reps_) {
@@ -353,6 +374,8 @@ void Builder::chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, 
       }
     }
     if (!seen) reps_.push_back(fi);
+  }
+  if (pass == 0) candidate_planes = reps_.size();
   }
   const size_t planes = reps_.size();
   // Per plane four bitsets over the set: crossed, front, back, on.
@@ -405,13 +428,13 @@ void Builder::chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, 
   std::vector<uint64_t> front_set(words), back_set(words);
   if (options_.free_first) {
     // A free plane (crossing nothing) first, the most balanced one; see chooseByFullCount.
-    for (size_t c = 0; c < planes; ++c) {
+    for (size_t c = 0; c < candidate_planes; ++c) {
       if (count(mask(c, 0)) != 0) continue;
       offerRanked(top, k, static_cast<double>(std::abs(count(mask(c, 1)) - count(mask(c, 2)))), reps_[c]);
     }
     if (!top.empty()) return;
   }
-  for (size_t c = 0; c < planes; ++c) {
+  for (size_t c = 0; c < candidate_planes; ++c) {
     const uint64_t *crossed = mask(c, 0), *front = mask(c, 1), *back = mask(c, 2);
     for (size_t w = 0; w < words; ++w) {
       front_set[w] = front[w] | crossed[w];
@@ -494,6 +517,7 @@ bool Builder::chooseByFullCount(const std::vector<uint32_t>& frags, size_t top_k
   // split_weight · m + m), so free planes rank before all others and among themselves by balance.
   const double free_bonus = 1e18;
   for (uint32_t rep : reps_) {
+    if (!candidate(rep)) continue;
     const Plane& pl = scene_.polygons[frags_[rep].poly].plane;
     const double weight = options_.split_weight * crossWeight(pl);
     double crossed = 0;
@@ -524,6 +548,7 @@ bool Builder::chooseByFullCount(const std::vector<uint32_t>& frags, size_t top_k
 
 void Builder::rankSplitters(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top) {
   top.clear();
+  restrictCandidates(frags);
   if (frags.size() <= options_.lookahead_max) {
     chooseWithLookahead(frags, k, top);
   } else if (!chooseByFullCount(frags, k, top)) {
@@ -535,7 +560,14 @@ void Builder::rankSplitters(const std::vector<uint32_t>& frags, size_t k, std::v
 uint32_t Builder::chooseSplitter(const std::vector<uint32_t>& frags) {
   const size_t m = frags.size();
   if (m == 1) return frags[0];
-  if (options_.heuristic == SplitHeuristic::kRandom) return frags[randomBelow(m)];
+  if (options_.heuristic == SplitHeuristic::kRandom) {
+    restrictCandidates(frags);
+    if (!candidates_restricted_) return frags[randomBelow(m)];
+    structural_.clear();
+    for (uint32_t fi : frags)
+      if (candidate(fi)) structural_.push_back(fi);
+    return structural_[randomBelow(structural_.size())];
+  }
   rankSplitters(frags, 1, ranked_);
   return ranked_.empty() ? frags[0] : ranked_[0].rep;
 }
@@ -550,8 +582,18 @@ void Builder::chooseBySampling(const std::vector<uint32_t>& frags, size_t top_k,
   const size_t samples = all_samples ? m : max_samples;
   sample_.resize(samples);
   for (size_t i = 0; i < samples; ++i) sample_[i] = all_samples ? frags[i] : frags[randomBelow(m)];
-  for (size_t c = 0; c < k; ++c) {
-    const uint32_t cand = m <= k ? frags[c] : frags[randomBelow(m)];
+  // Candidates are drawn from the fragments that may give the node's plane.
+  const std::vector<uint32_t>* pool = &frags;
+  if (candidates_restricted_) {
+    structural_.clear();
+    for (uint32_t fi : frags)
+      if (candidate(fi)) structural_.push_back(fi);
+    pool = &structural_;
+  }
+  const size_t pool_size = pool->size();
+  const size_t kc = std::min(k, pool_size);
+  for (size_t c = 0; c < kc; ++c) {
+    const uint32_t cand = pool_size <= kc ? (*pool)[c] : (*pool)[randomBelow(pool_size)];
     const Plane& pl = scene_.polygons[frags_[cand].poly].plane;
     int64_t splits = 0, front = 0, back = 0, on = 0;
     for (uint32_t fi : sample_) {
@@ -733,6 +775,8 @@ uint64_t Builder::run() {
   hv_.reserve(scene_.vertices.size() * 2);
   frags_.reserve(n * 2);
   boxes_.reserve(n * 2);
+  detail_ = detailPolygons(scene_, options_.detail_extent);
+  if (std::find(detail_.begin(), detail_.end(), uint8_t{1}) == detail_.end()) detail_.clear();
   std::vector<uint32_t> all(n);
   for (size_t i = 0; i < n; ++i) {
     const Polygon& poly = scene_.polygons[i];

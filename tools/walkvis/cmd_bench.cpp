@@ -5,7 +5,8 @@
 //
 //   walkvis bench bsp [--scenes LIST] [--runs K] [--json]
 //     BSP build time, N/n, depth and bytes per scene, least-crossed heuristic versus random-order
-//     autopartition in the same run. Targets (issue text): N/n <= 1.5 on the Freedoom maps, a
+//     autopartition in the same run. Targets (docs/DESIGN.md, "Targets"): N/n <= 1.5 on the Freedoom
+//     maps, a
 //     ~100k-polygon office builds in under 5 s.
 #include <algorithm>
 #include <chrono>
@@ -69,6 +70,8 @@ struct BspBenchArgs {
   uint64_t full_count_max = BspOptions{}.full_count_max;
   bool free_first = BspOptions{}.free_first;
   double horizontal_weight = BspOptions{}.horizontal_weight;
+  double detail_extent = BspOptions{}.detail_extent;
+  LoadOptions load;
   bool json = false;
 };
 
@@ -89,6 +92,7 @@ int runBspBench(const BspBenchArgs& args) {
   out["full_count_max"] = args.full_count_max;
   out["free_first"] = args.free_first;
   out["horizontal_weight"] = args.horizontal_weight;
+  out["detail_extent"] = args.detail_extent;
   auto rows = nlohmann::ordered_json::array();
   if (!args.json)
     std::printf("%-28s %8s %-13s %9s %6s %5s %6s %10s %9s %8s %8s\n", "scene", "n", "heuristic", "N", "N/n", "depth",
@@ -102,7 +106,7 @@ int runBspBench(const BspBenchArgs& args) {
   int scene_count = 0;
   for (const std::string& spec : scenes) {
     const auto t0 = std::chrono::steady_clock::now();
-    const Scene scene = loadScene(spec);
+    const Scene scene = loadScene(spec, args.load);
     const double load_seconds = secondsSince(t0);
     nlohmann::ordered_json row;
     row["scene"] = spec;
@@ -114,6 +118,7 @@ int runBspBench(const BspBenchArgs& args) {
       BspOptions options{heuristics[h], args.candidates, args.seed, args.samples, args.split_weight,
                          args.coplanar_weight, args.lookahead_max, args.full_count_max, args.free_first,
                          args.horizontal_weight};
+      options.detail_extent = args.detail_extent;
       std::vector<double> times, cpu_times;
       std::vector<double> order_times;
       BspStats stats;
@@ -133,9 +138,16 @@ int runBspBench(const BspBenchArgs& args) {
       const double med = median(times);
       const double cpu_med = median(cpu_times);
       ratio_of[h] = stats.ratio;
-      results.push_back({{"heuristic", heuristicName(heuristics[h])},
+      results.push_back({{"scene", spec},
+                         {"heuristic", heuristicName(heuristics[h])},
+                         {"polygons", stats.input_polygons},
                          {"fragments", stats.fragments},
+                         {"fragments_per_polygon", stats.ratio},
                          {"ratio", stats.ratio},
+                         {"structure_fragments", stats.structure_fragments},
+                         {"detail_objects", stats.detail_objects},
+                         {"detail_polygons", stats.detail_polygons},
+                         {"build_cpu_seconds", cpu_med},
                          {"nodes", stats.nodes},
                          {"depth_max", stats.depth_max},
                          {"depth_mean", stats.depth_mean},
@@ -242,6 +254,11 @@ void addBspBench(CLI::App& bench, CommandRunner& runner) {
                   "Least-crossed: take a plane crossing nothing before any other (exact scoring only; true/false)");
   sub->add_option("--horizontal-weight", args->horizontal_weight,
                   "Least-crossed: factor on the crossing count of a horizontal plane (exact scoring only)");
+  sub->add_option("--detail-extent", args->detail_extent,
+                  "Objects whose bounding box is smaller than this many eye heights are detail: they never split "
+                  "the structure (0 = all structure)")
+      ->check(CLI::NonNegativeNumber);
+  addLoadOptions(*sub, args->load);
   sub->add_flag("--json", args->json, "Print JSON");
   sub->callback([args, &runner] { runner = [args] { return runBspBench(*args); }; });
 }

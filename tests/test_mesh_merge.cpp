@@ -636,28 +636,13 @@ TEST(MeshMergeIds, MergedAndUnmergedRoomsRenderTheSameIds) {
   EXPECT_LE(c.mismatched, c.pixels / 200);
 }
 
-TEST(MeshMergeIds, FzkHausMergedAndUnmergedRenderTheSameIds) {
-  const std::string ifc = "/usr/share/assimp/models/IFC/AC14-FZK-Haus.ifc";
-  if (!std::filesystem::exists(ifc)) GTEST_SKIP() << "no " << ifc << " (Debian assimp-testmodels)";
-  if (std::system("command -v assimp > /dev/null 2>&1") != 0) GTEST_SKIP() << "no assimp command (assimp-utils)";
-  if (!haveRenderer()) GTEST_SKIP() << "no OSMesa GL 4.5 context";
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("walkvis_mesh_merge_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string obj = (dir / "fzk.obj").string();
-  const std::string cmd = "assimp export '" + ifc + "' '" + obj + "' > /dev/null 2>&1";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  const auto t0 = std::chrono::steady_clock::now();
-  const Scene merged = loadObj(obj, true);
-  const double merge_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto t1 = std::chrono::steady_clock::now();
-  const Scene plain = loadObj(obj, false);
-  const double plain_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-  std::filesystem::remove_all(dir);
+// The house merged and unmerged: same area, convex pieces, and the same id images (unmerged ids
+// mapped through input_to_face) from eyes inside both storeys.
+void expectHouseIdsAgree(const Scene& plain, const Scene& merged, const char* what, double merge_s, double plain_s) {
   const LoadReport& r = merged.report;
-  std::printf("FZK-Haus: %llu input faces; %zu polygons unmerged, %zu merged (%llu faces into %llu, %llu "
+  std::printf("%s: %llu input faces; %zu polygons unmerged, %zu merged (%llu faces into %llu, %llu "
               "T-junction vertices); load %.3f s merged, %.3f s unmerged\n",
-              static_cast<unsigned long long>(r.input_faces), plain.polygons.size(), merged.polygons.size(),
+              what, static_cast<unsigned long long>(r.input_faces), plain.polygons.size(), merged.polygons.size(),
               static_cast<unsigned long long>(r.merged_input_faces), static_cast<unsigned long long>(r.merged_faces),
               static_cast<unsigned long long>(r.tjunctions_removed), merge_s, plain_s);
   expectCountsConsistent(merged, plain.report.input_faces);
@@ -672,7 +657,7 @@ TEST(MeshMergeIds, FzkHausMergedAndUnmergedRenderTheSameIds) {
     }
   }
   EXPECT_EQ(bad, 0u) << "reflex corners in merged polygons";
-  // Eyes inside the house (the export is y-up in metres): both storeys, a few rooms.
+  // Eyes inside the house (y-up in metres): both storeys, a few rooms.
   const Bounds b = sceneBounds(plain);
   std::vector<glm::dvec3> eyes;
   for (double fx : {0.35, 0.6}) {
@@ -683,11 +668,53 @@ TEST(MeshMergeIds, FzkHausMergedAndUnmergedRenderTheSameIds) {
   eyes.emplace_back(b.lo.x + 0.5 * (b.hi.x - b.lo.x), 4.4, b.lo.z + 0.45 * (b.hi.z - b.lo.z));
   const int size = 128;
   const IdCompare c = compareIdImages(plain, merged, eyes, size, 0.05, 200.0);
-  std::printf("FZK-Haus ids: %llu of %llu pixels differ (%llu drawn), %zu views of %d px\n",
+  std::printf("%s ids: %llu of %llu pixels differ (%llu drawn), %zu views of %d px\n", what,
               static_cast<unsigned long long>(c.mismatched), static_cast<unsigned long long>(c.pixels),
               static_cast<unsigned long long>(c.drawn), eyes.size() * kCubeFaces, size);
   EXPECT_GT(c.drawn, c.pixels / 2);
   EXPECT_LE(c.mismatched, c.pixels / 100);
+}
+
+const char* const kFzkIfc = "/usr/share/assimp/models/IFC/AC14-FZK-Haus.ifc";
+
+double secondsOf(const std::chrono::steady_clock::time_point& t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TEST(MeshMergeIds, FzkHausObjMergedAndUnmergedRenderTheSameIds) {
+  const std::string ifc = kFzkIfc;
+  if (!std::filesystem::exists(ifc)) GTEST_SKIP() << "no " << ifc << " (Debian assimp-testmodels)";
+  if (std::system("command -v assimp > /dev/null 2>&1") != 0) GTEST_SKIP() << "no assimp command (assimp-utils)";
+  if (!haveRenderer()) GTEST_SKIP() << "no OSMesa GL 4.5 context";
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("walkvis_mesh_merge_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string obj = (dir / "fzk.obj").string();
+  const std::string cmd = "assimp export '" + ifc + "' '" + obj + "' > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene merged = loadObj(obj, true);
+  const double merge_s = secondsOf(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  const Scene plain = loadObj(obj, false);
+  const double plain_s = secondsOf(t1);
+  std::filesystem::remove_all(dir);
+  expectHouseIdsAgree(plain, merged, "FZK-Haus OBJ", merge_s, plain_s);
+}
+
+// Through assimp every mesh instance is an object of its own, so far more merges.
+TEST(MeshMergeIds, FzkHausIfcMergedAndUnmergedRenderTheSameIds) {
+  if (!std::filesystem::exists(kFzkIfc)) GTEST_SKIP() << "no " << kFzkIfc << " (Debian assimp-testmodels)";
+  if (!haveRenderer()) GTEST_SKIP() << "no OSMesa GL 4.5 context";
+  LoadOptions options;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene merged = loadAssimp(kFzkIfc, options);
+  const double merge_s = secondsOf(t0);
+  options.merge_faces = false;
+  const auto t1 = std::chrono::steady_clock::now();
+  const Scene plain = loadAssimp(kFzkIfc, options);
+  const double plain_s = secondsOf(t1);
+  expectHouseIdsAgree(plain, merged, "FZK-Haus IFC", merge_s, plain_s);
 }
 
 }  // namespace

@@ -160,6 +160,10 @@ int runInfo(const InfoArgs& args) {
   j["dropped_faces"] = r.dropped_zero_area + r.dropped_degenerate;
   j["dropped_zero_area"] = r.dropped_zero_area;
   j["dropped_degenerate"] = r.dropped_degenerate;
+  j["merged_input_faces"] = r.merged_input_faces;
+  j["merged_faces"] = r.merged_faces;
+  j["tjunctions_removed"] = r.tjunctions_removed;
+  j["objects"] = scene.face_object.empty() ? 0 : scene.face_object.back() + 1;
   j["closed"] = closed;
   j["notes"] = r.notes;
   j["load_seconds"] = load_seconds;
@@ -196,6 +200,12 @@ int runInfo(const InfoArgs& args) {
               static_cast<unsigned long long>(r.dropped_zero_area + r.dropped_degenerate),
               static_cast<unsigned long long>(r.dropped_zero_area),
               static_cast<unsigned long long>(r.dropped_degenerate));
+  if (r.merged_input_faces > 0 || r.tjunctions_removed > 0) {
+    std::printf("merged       %llu input faces into %llu faces (adjacent, coplanar, one object and colour); "
+                "%llu T-junction vertices put on edges\n",
+                static_cast<unsigned long long>(r.merged_input_faces), static_cast<unsigned long long>(r.merged_faces),
+                static_cast<unsigned long long>(r.tjunctions_removed));
+  }
   for (const auto& note : r.notes) std::printf("  note: %s\n", note.c_str());
   std::printf("closed       %s\n", closed ? "yes" : "no");
   std::printf("loaded in    %.3f s\n", load_seconds);

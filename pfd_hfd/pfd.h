@@ -317,9 +317,11 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
 // a Freedoom map has up to a hundred levels of one cell each, whose own work comes in batches
 // too small to keep two threads busy. The result does not depend on thread order. `used_bytes`
 // and `progress` as for buildPfdLevel (progress lines of different levels may interleave).
+// `only` (ascending level indices, each < levels.size()) builds just those levels; empty: all.
 std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
                                      const PfdLevelOptions& options, uint64_t& used_bytes,
-                                     const std::function<void(const std::string&)>& progress = {});
+                                     const std::function<void(const std::string&)>& progress = {},
+                                     std::span<const uint32_t> only = {});
 
 // The tree of the level's cell that holds (eye.x, eye.z), or null when none does (cells are
 // half-open boxes [lo, hi)).

@@ -168,7 +168,8 @@ PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t lev
 
 std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
                                      const PfdLevelOptions& options, uint64_t& used_bytes,
-                                     const std::function<void(const std::string&)>& progress) {
+                                     const std::function<void(const std::string&)>& progress,
+                                     std::span<const uint32_t> only) {
   std::atomic<uint64_t> used{used_bytes};
   std::mutex progress_mutex;
   const std::function<void(const std::string&)> say = [&](const std::string& line) {
@@ -176,9 +177,15 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
     std::lock_guard<std::mutex> lock(progress_mutex);
     progress(line);
   };
-  std::vector<PfdLevel> out(levels.size());
-  tbb::parallel_for(size_t{0}, levels.size(), [&](size_t l) {
-    out[l] = buildLevel(bsp, levels[l], static_cast<uint32_t>(l), eye_height, options, used, say);
+  std::vector<uint32_t> chosen(only.begin(), only.end());
+  if (only.empty()) {
+    chosen.resize(levels.size());
+    for (size_t l = 0; l < levels.size(); ++l) chosen[l] = static_cast<uint32_t>(l);
+  }
+  std::vector<PfdLevel> out(chosen.size());
+  tbb::parallel_for(size_t{0}, chosen.size(), [&](size_t i) {
+    const uint32_t l = chosen[i];
+    out[i] = buildLevel(bsp, levels[l], l, eye_height, options, used, say);
   });
   used_bytes = used.load();
   return out;

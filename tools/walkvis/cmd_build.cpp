@@ -28,6 +28,7 @@ struct BuildArgs {
   std::string cell_memory = "64M";
   std::string heuristic = "balanced";
   std::string samples;  // hfd: R,P,REFINE
+  std::vector<uint32_t> levels;  // only these level indices; empty: all
   uint64_t visibility_seed = 1;
   bool keep_back_faces = false;
   bool no_dedup = false;
@@ -154,6 +155,15 @@ int runBuild(const BuildArgs& args) {
   const Scene scene = loadScene(args.scene.scene, args.scene.loadOptions());
   progress("loaded " + scene.name + ": " + std::to_string(scene.polygons.size()) + " polygons, " +
            std::to_string(scene.levels.size()) + " levels");
+  std::vector<uint32_t> only = args.levels;
+  std::sort(only.begin(), only.end());
+  only.erase(std::unique(only.begin(), only.end()), only.end());
+  for (uint32_t l : only) {
+    if (l >= scene.levels.size()) {
+      throw SceneError(scene.name + ": --levels names level " + std::to_string(l) + ", but the scene has " +
+                       std::to_string(scene.levels.size()) + " (walkvis info lists them)");
+    }
+  }
   TreeFile file;
   file.eye_height = scene.eye_height;
   file.bsp = buildBsp(scene);
@@ -174,8 +184,8 @@ int runBuild(const BuildArgs& args) {
   }
   uint64_t used = 0;
   const auto build0 = std::chrono::steady_clock::now();
-  progress(std::to_string(scene.levels.size()) + " levels, built in parallel...");
-  file.levels = buildPfdLevels(file.bsp, scene.levels, scene.eye_height, options, used, progress);
+  progress(std::to_string(only.empty() ? scene.levels.size() : only.size()) + " levels, built in parallel...");
+  file.levels = buildPfdLevels(file.bsp, scene.levels, scene.eye_height, options, used, progress, only);
   const double trees_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build0).count();
   saveTreeFile(file, args.output);
   progress("wrote " + args.output);
@@ -352,6 +362,10 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("--visibility-seed", args->visibility_seed, "hfd: seed of the visibility sampling");
   sub->add_flag("--keep-back-faces", args->keep_back_faces,
                 "List back-facing fragments too (for run-time backface methods); default: dropped at build");
+  sub->add_option("--levels", args->levels,
+                  "Build only these levels (indices as walkvis info lists them, comma-separated; default: all); "
+                  "elsewhere the walkthrough uses the BSP order")
+      ->delimiter(',');
   sub->add_option("--max-memory", args->max_memory, "Budget for all trees together (e.g. 512M, 2G; default 1G)");
   sub->add_option("--cell-memory", args->cell_memory,
                   "A tree over this many bytes is cut into four view cells (default 64M; 0: never)");

@@ -358,17 +358,25 @@ TEST(Pfd, ParallelLevelsEqualOneByOne) {
   const std::vector<PfdLevel> all = buildPfdLevels(bsp, scene.levels, scene.eye_height, options, used_all);
   EXPECT_EQ(used_one, used_all);
   ASSERT_EQ(one.size(), all.size());
-  for (size_t l = 0; l < one.size(); ++l) {
-    EXPECT_EQ(one[l].level, all[l].level);
-    EXPECT_EQ(one[l].height, all[l].height);
-    ASSERT_EQ(one[l].cells.size(), all[l].cells.size()) << "level " << l;
-    for (size_t c = 0; c < one[l].cells.size(); ++c) {
-      const PfdTree &a = one[l].cells[c], &b = all[l].cells[c];
+  const auto expectSameLevel = [](const PfdLevel& a_level, const PfdLevel& b_level) {
+    EXPECT_EQ(a_level.level, b_level.level);
+    EXPECT_EQ(a_level.height, b_level.height);
+    ASSERT_EQ(a_level.cells.size(), b_level.cells.size()) << "level " << a_level.level;
+    for (size_t c = 0; c < a_level.cells.size(); ++c) {
+      const PfdTree &a = a_level.cells[c], &b = b_level.cells[c];
       EXPECT_EQ(a.nodes.size(), b.nodes.size());
       EXPECT_EQ(a.run_refs, b.run_refs);
       EXPECT_EQ(a.fragment_ids, b.fragment_ids);
     }
-  }
+  };
+  for (size_t l = 0; l < one.size(); ++l) expectSameLevel(one[l], all[l]);
+  // A chosen subset (build --levels) gives those levels exactly, with their own indices.
+  const uint32_t chosen[] = {1, static_cast<uint32_t>(scene.levels.size() - 1)};
+  uint64_t used_some = 0;
+  const std::vector<PfdLevel> some =
+      buildPfdLevels(bsp, scene.levels, scene.eye_height, options, used_some, {}, chosen);
+  ASSERT_EQ(some.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) expectSameLevel(some[i], all[chosen[i]]);
 }
 
 TEST(Pfd, FreedoomMapMatchesBspOrder) { checkScene("freedoom2.wad:MAP01", 1000); }

@@ -72,14 +72,6 @@ void planeAxes(const glm::dvec3& n, glm::dvec3& u, glm::dvec3& v) {
   v = glm::cross(n, u);
 }
 
-double shoelace(const std::vector<glm::dvec2>& p) {
-  double a = 0.0;
-  for (size_t k = 1; k + 1 < p.size(); ++k) {
-    const glm::dvec2 s = p[k] - p[0], t = p[k + 1] - p[0];
-    a += s.x * t.y - t.x * s.y;
-  }
-  return 0.5 * a;
-}
 
 struct Face {
   std::vector<uint32_t> loop;  // distinct vertex ids, consecutive repeats removed
@@ -365,7 +357,7 @@ class Merger {
         net[a < b ? edgeKey(a, b) : edgeKey(b, a)] += a < b ? 1 : -1;
         ring.push_back(flat2.at(a));
       }
-      const double a = shoelace(ring);
+      const double a = signedArea(ring);
       if (!(a > 0.0)) return std::nullopt;
       faces_area += a;
     }
@@ -420,7 +412,7 @@ class Merger {
         ids.push_back(it->second);
         in_pieces.insert(it->second);
       }
-      pieces_area += shoelace(piece);
+      pieces_area += signedArea(piece);
       out.polygons.push_back(std::move(ids));
     }
     // The pieces cover the odd-winding region; faces that overlap would make it smaller than
@@ -477,15 +469,6 @@ class Merger {
     return id;
   }
 
-  void pushPolygon(const std::vector<glm::dvec3>& verts, uint32_t face_id, const Plane& plane) {
-    Polygon poly;
-    poly.first_vertex = static_cast<uint32_t>(scene_.vertices.size());
-    poly.vertex_count = static_cast<uint32_t>(verts.size());
-    poly.face_id = face_id;
-    poly.plane = plane;
-    scene_.vertices.insert(scene_.vertices.end(), verts.begin(), verts.end());
-    scene_.polygons.push_back(poly);
-  }
 
   uint32_t emitGroup(const std::vector<uint32_t>& members, const Pieces& pieces) {
     const uint32_t id = newFaceId(faces_[members[0]].color);
@@ -511,7 +494,7 @@ class Merger {
       for (const auto& p : p3) off = std::max(off, std::abs(glm::dot(pieces.plane.n, p) - pieces.plane.d));
       // addFace's planarity tolerance (scene.cpp), so a merged piece is as planar as a kept face.
       if (off <= 1e-6 * extent) {
-        pushPolygon(p3, id, pieces.plane);
+        appendPolygon(scene_, p3, id, pieces.plane);
         ++made;
         continue;
       }
@@ -535,7 +518,7 @@ class Merger {
       for (const auto& tri : tris) {
         const Plane tp = newellPlane(tri);
         if (glm::length(tp.n) == 0.0) continue;
-        pushPolygon(tri, id, tp);
+        appendPolygon(scene_, tri, id, tp);
         ++made;
       }
     }

@@ -54,7 +54,9 @@ bool isConvexCcw(const std::vector<glm::dvec2>& p) {
   return turning < 3.0 * M_PI;
 }
 
-uint32_t pushPolygon(Scene& scene, std::span<const glm::dvec3> verts, uint32_t face_id, const Plane& plane) {
+}  // namespace
+
+uint32_t appendPolygon(Scene& scene, std::span<const glm::dvec3> verts, uint32_t face_id, const Plane& plane) {
   Polygon poly;
   poly.first_vertex = static_cast<uint32_t>(scene.vertices.size());
   poly.vertex_count = static_cast<uint32_t>(verts.size());
@@ -64,6 +66,17 @@ uint32_t pushPolygon(Scene& scene, std::span<const glm::dvec3> verts, uint32_t f
   scene.polygons.push_back(poly);
   return static_cast<uint32_t>(scene.polygons.size() - 1);
 }
+
+double signedArea(std::span<const glm::dvec2> p) {
+  double a = 0.0;
+  for (size_t k = 1; k + 1 < p.size(); ++k) {
+    const glm::dvec2 s = p[k] - p[0], t = p[k + 1] - p[0];
+    a += s.x * t.y - t.x * s.y;
+  }
+  return 0.5 * a;
+}
+
+namespace {
 
 uint32_t newFace(Scene& scene, uint32_t color) {
   scene.face_colors.push_back(color);
@@ -166,7 +179,7 @@ uint32_t addFace(Scene& scene, std::span<const glm::dvec3> input, uint32_t color
   for (const auto& p : v) flat2.emplace_back(glm::dot(p, u_axis), glm::dot(p, v_axis));
 
   if (planar && isConvexCcw(flat2)) {
-    pushPolygon(scene, v, face_id, plane);
+    appendPolygon(scene, v, face_id, plane);
     scene.report.kept_faces++;
     return face_id;
   }
@@ -186,7 +199,7 @@ uint32_t addFace(Scene& scene, std::span<const glm::dvec3> input, uint32_t color
       p3.push_back(it != lift.end() ? it->second : plane.n * plane.d + u_axis * q.x + v_axis * q.y);
     }
     if (planar) {
-      pushPolygon(scene, p3, face_id, plane);
+      appendPolygon(scene, p3, face_id, plane);
       ++made;
       continue;
     }
@@ -195,7 +208,7 @@ uint32_t addFace(Scene& scene, std::span<const glm::dvec3> input, uint32_t color
       const glm::dvec3 tri[3] = {p3[0], p3[i], p3[i + 1]};
       const Plane tp = newellPlane(tri);
       if (glm::length(tp.n) == 0.0) continue;
-      pushPolygon(scene, tri, face_id, tp);
+      appendPolygon(scene, tri, face_id, tp);
       ++made;
     }
   }
@@ -233,7 +246,7 @@ uint32_t addPlanarRegion(Scene& scene, const std::vector<std::vector<glm::dvec2>
       if (glm::length(plane.n) == 0.0) continue;
       have_plane = true;
     }
-    pushPolygon(scene, p3, face_id, plane);
+    appendPolygon(scene, p3, face_id, plane);
     ++made;
   }
   if (made == 0) {
@@ -249,16 +262,6 @@ uint32_t addPlanarRegion(Scene& scene, const std::vector<std::vector<glm::dvec2>
 
 namespace {
 
-double signedAreaXz(const std::vector<glm::dvec2>& p) {
-  double a = 0.0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    const auto& s = p[i];
-    const auto& t = p[(i + 1) % p.size()];
-    a += s.x * t.y - t.x * s.y;
-  }
-  return 0.5 * a;
-}
-
 bool insideConvexXz(const std::vector<glm::dvec2>& p, const glm::dvec2& q) {
   // Pieces are normalised to negative shoelace area: inside means every cross product <= 0.
   for (size_t i = 0; i < p.size(); ++i) {
@@ -269,12 +272,11 @@ bool insideConvexXz(const std::vector<glm::dvec2>& p, const glm::dvec2& q) {
 
 }  // namespace
 
-void deriveFloorLevels(Scene& scene) {
-  if (scene.polygons.empty()) return;
+std::vector<FloorHeight> upwardFloorHeights(const Scene& scene) {
+  std::vector<FloorHeight> out;
+  if (scene.polygons.empty()) return out;
   const Bounds b = sceneBounds(scene);
   const double extent = std::max({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z, 1e-300});
-  // Floors from files are horizontal only up to the file's rounding (~1e-7 relative): heights
-  // closer than 1e-6 of the scene's size are one level.
   const double height_tol = 1e-6 * extent;
   std::vector<std::pair<double, uint32_t>> floors;
   for (uint32_t i = 0; i < scene.polygons.size(); ++i) {
@@ -282,16 +284,25 @@ void deriveFloorLevels(Scene& scene) {
     if (p.plane.n.y >= 1.0 - 1e-9) floors.emplace_back(p.plane.d, i);
   }
   std::sort(floors.begin(), floors.end());
-  scene.levels.clear();
   for (const auto& [h, idx] : floors) {
-    if (scene.levels.empty() || h - scene.levels.back().floor_y > height_tol) {
-      FloorLevel level;
-      level.floor_y = h;
-      scene.levels.push_back(level);
+    if (out.empty() || h - out.back().y > height_tol) out.push_back(FloorHeight{h, {}});
+    out.back().polygons.push_back(idx);
+  }
+  return out;
+}
+
+void deriveFloorLevels(Scene& scene) {
+  if (scene.polygons.empty()) return;
+  scene.levels.clear();
+  for (const FloorHeight& height : upwardFloorHeights(scene)) {
+    FloorLevel level;
+    level.floor_y = height.y;
+    for (uint32_t idx : height.polygons) {
+      std::vector<glm::dvec2> piece;
+      for (const auto& v : scene.polygonVertices(idx)) piece.emplace_back(v.x, v.z);
+      level.walkable.push_back(std::move(piece));
     }
-    std::vector<glm::dvec2> piece;
-    for (const auto& v : scene.polygonVertices(idx)) piece.emplace_back(v.x, v.z);
-    scene.levels.back().walkable.push_back(std::move(piece));
+    scene.levels.push_back(std::move(level));
   }
 }
 
@@ -316,8 +327,8 @@ void placeStartEye(Scene& scene) {
   for (auto& level : scene.levels) {
     level.walkable_area = 0.0;
     for (auto& piece : level.walkable) {
-      if (signedAreaXz(piece) > 0.0) std::reverse(piece.begin(), piece.end());
-      level.walkable_area += -signedAreaXz(piece);
+      if (signedArea(piece) > 0.0) std::reverse(piece.begin(), piece.end());
+      level.walkable_area += -signedArea(piece);
     }
   }
   std::sort(scene.levels.begin(), scene.levels.end(),
@@ -358,7 +369,7 @@ void placeStartEye(Scene& scene) {
   const std::vector<glm::dvec2>* largest = nullptr;
   double largest_area = -1.0;
   for (const auto& piece : low->walkable) {
-    const double a = -signedAreaXz(piece);
+    const double a = -signedArea(piece);
     if (a > largest_area) {
       largest_area = a;
       largest = &piece;

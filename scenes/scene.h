@@ -161,6 +161,23 @@ uint32_t addPlanarRegion(Scene& scene, const std::vector<std::vector<glm::dvec2>
 // counter-clockwise. Implemented with a CGAL constrained triangulation and Hertel–Mehlhorn merging.
 std::vector<std::vector<glm::dvec2>> convexPartition(const std::vector<std::vector<glm::dvec2>>& rings);
 
+// Appends one convex planar polygon (vertices counter-clockwise about plane.n) with its face id;
+// returns its index. For loaders that have already made convex pieces of a face.
+uint32_t appendPolygon(Scene& scene, std::span<const glm::dvec3> vertices, uint32_t face_id, const Plane& plane);
+
+// The signed area of a ring of 2D points, positive when counter-clockwise. Summed as a fan from
+// the first point, so rounding scales with the ring's size rather than with its coordinates.
+double signedArea(std::span<const glm::dvec2> ring);
+
+// The scene's upward horizontal polygons (n.y >= 1 - 1e-9) grouped by height, lowest first:
+// heights within 1e-6 of the scene's size are one (files are level only up to their rounding).
+// What floor levels are made of, by either method (deriveFloorLevels, walkable.h).
+struct FloorHeight {
+  double y = 0.0;                  // the lowest height of the group
+  std::vector<uint32_t> polygons;  // indices into Scene::polygons
+};
+std::vector<FloorHeight> upwardFloorHeights(const Scene& scene);
+
 // Derives floor levels from upward-facing horizontal polygons (OBJ, glTF, generators that do not
 // set them): one level per distinct height, its walkable region the union of those polygons.
 void deriveFloorLevels(Scene& scene);

@@ -45,15 +45,6 @@ struct Rect {
   int tag = -1;        // for connection rectangles: a level whose own faces are left out (-1 none)
 };
 
-double shoelace(const std::vector<glm::dvec2>& p) {
-  double a = 0.0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    const glm::dvec2& u = p[i];
-    const glm::dvec2& w = p[(i + 1) % p.size()];
-    a += u.x * w.y - w.x * u.y;
-  }
-  return 0.5 * a;
-}
 
 // Sutherland–Hodgman against one axis-aligned line: keeps coord[axis] * sign >= value * sign.
 // The cut point is computed from the edge's two ends in one order (lower end first) so that
@@ -257,26 +248,14 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
     }
   };
 
-  // Candidate heights: exact upward horizontal faces (as deriveFloorLevels reads them), heights
-  // within 1e-6 of the scene's size (a file's rounding) one candidate.
-  const double extent = std::max({size.x, size.y, size.z, 1e-300});
-  const double height_tol = 1e-6 * extent;
-  std::vector<std::pair<double, uint32_t>> flat;
-  for (uint32_t i = 0; i < scene.polygons.size(); ++i) {
-    const Polygon& p = scene.polygons[i];
-    if (p.plane.n.y >= 1.0 - 1e-9) flat.emplace_back(p.plane.d, i);
-  }
-  std::sort(flat.begin(), flat.end());
+  // Candidate heights: exact upward horizontal faces, grouped as deriveFloorLevels groups them.
   std::vector<double> cand_y;
   std::vector<std::vector<uint32_t>> cand_faces;
   std::vector<int> poly_cand(scene.polygons.size(), -1);
-  for (const auto& [h, idx] : flat) {
-    if (cand_y.empty() || h - cand_y.back() > height_tol) {
-      cand_y.push_back(h);
-      cand_faces.emplace_back();
-    }
-    cand_faces.back().push_back(idx);
-    poly_cand[idx] = static_cast<int>(cand_y.size()) - 1;
+  for (FloorHeight& height : upwardFloorHeights(scene)) {
+    for (uint32_t idx : height.polygons) poly_cand[idx] = static_cast<int>(cand_y.size());
+    cand_y.push_back(height.y);
+    cand_faces.push_back(std::move(height.polygons));
   }
   // Cell rectangles are in grid coordinates; one formula turns them into scene coordinates so
   // that neighbouring rectangles share their edges exactly.
@@ -299,7 +278,7 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
         for (int z = z_lo; z <= z_hi; ++z) {
           clipAxis(face.ring, tmp, 1, cellZ(z), 1.0);
           clipAxis(tmp, band, 1, cellZ(z + 1), -1.0);
-          if (band.size() < 3 || std::abs(shoelace(band)) <= min_piece) continue;
+          if (band.size() < 3 || std::abs(signedArea(band)) <= min_piece) continue;
           double lo = band[0].x, hi = band[0].x;
           for (const auto& p : band) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
           const int x_lo = std::max(0, static_cast<int>(std::floor((lo - cellX(0)) / cs)));
@@ -467,7 +446,7 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
         const double x0 = cellX(r.x0), x1 = cellX(r.x1 + 1), z0 = cellZ(r.z0), z1 = cellZ(r.z1 + 1);
         if (face.hi_x <= x0 || face.lo_x >= x1 || face.hi_z <= z0 || face.lo_z >= z1) continue;
         piece = clipToBox(face.ring, x0, x1, z0, z1);
-        if (piece.size() >= 3 && std::abs(shoelace(piece)) > min_piece) level.walkable.push_back(piece);
+        if (piece.size() >= 3 && std::abs(signedArea(piece)) > min_piece) level.walkable.push_back(piece);
       }
     }
   }
@@ -566,7 +545,7 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
         const double x0 = cellX(r.x0), x1 = cellX(r.x1 + 1), z0 = cellZ(r.z0), z1 = cellZ(r.z1 + 1);
         if (face.hi_x <= x0 || face.lo_x >= x1 || face.hi_z <= z0 || face.lo_z >= z1) continue;
         piece = clipToBox(face.ring, x0, x1, z0, z1);
-        if (piece.size() < 3 || std::abs(shoelace(piece)) <= min_piece) continue;
+        if (piece.size() < 3 || std::abs(signedArea(piece)) <= min_piece) continue;
         // Keep surfaces at the cell's floor or within a climb below it (the lower tread beside a
         // riser that shares a cell with the upper one), not floors far under or ceilings over.
         glm::dvec2 c(0.0);

@@ -27,15 +27,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-double ringArea(const std::vector<glm::dvec2>& ring) {
-  double a = 0.0;
-  for (size_t k = 0; k < ring.size(); ++k) {
-    const glm::dvec2& p = ring[k];
-    const glm::dvec2& q = ring[(k + 1) % ring.size()];
-    a += p.x * q.y - q.x * p.y;
-  }
-  return 0.5 * std::abs(a);
-}
 
 double triangleArea(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
   return 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
@@ -200,7 +191,7 @@ std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t se
   std::vector<double> weights;
   for (size_t l = 0; l < scene.levels.size(); ++l) {
     for (const auto& ring : scene.levels[l].walkable) {
-      const double a = ring.size() >= 3 ? ringArea(ring) : 0.0;
+      const double a = ring.size() >= 3 ? std::abs(signedArea(ring)) : 0.0;
       if (a > 0.0 && std::isfinite(a)) {
         pieces.push_back({static_cast<int>(l), &ring});
         weights.push_back(a);

@@ -609,8 +609,6 @@ const aiScene* importFile(Assimp::Importer& importer, std::span<const uint8_t> b
 // once in a forked child first, with stderr closed (a sanitizer's report would be a second line);
 // a child that dies or exits other than 0 (read) or 3 (assimp's own error) means the file would
 // crash us. The import in this process then follows. Costs one more import (FZK-Haus: +0.1 s).
-constexpr unsigned kMaxImportSeconds = 300;
-
 void probeInChild(std::span<const uint8_t> bytes, const std::string& path, const std::string& ext,
                   const LoadOptions& options, const std::string& context) {
   std::fflush(nullptr);
@@ -623,10 +621,10 @@ void probeInChild(std::span<const uint8_t> bytes, const std::string& path, const
     const rlimit no_core{0, 0};
     setrlimit(RLIMIT_CORE, &no_core);
     // A reader caught in a loop ends here rather than hanging the command: SIGALRM's default
-    // action ends the child. The limit is far above any real file's import (FZK-Haus: 0.2 s; the
-    // 512 MiB size cap reads in well under a minute).
+    // action ends the child. The default limit is far above any real file's import (FZK-Haus:
+    // 0.2 s; the 512 MiB size cap reads in well under a minute).
     std::signal(SIGALRM, SIG_DFL);
-    alarm(kMaxImportSeconds);
+    alarm(std::max(1u, options.import_seconds_max));
     const int null_fd = open("/dev/null", O_WRONLY);
     if (null_fd >= 0) {
       dup2(null_fd, STDERR_FILENO);
@@ -647,7 +645,7 @@ void probeInChild(std::span<const uint8_t> bytes, const std::string& path, const
   }
   if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 3)) return;
   if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM) {
-    throw SceneError(context + ": assimp did not finish reading it in " + std::to_string(kMaxImportSeconds) +
+    throw SceneError(context + ": assimp did not finish reading it in " + std::to_string(std::max(1u, options.import_seconds_max)) +
                      " s: the file is malformed or too large");
   }
   const std::string how = WIFSIGNALED(status) ? std::string("signal ") + std::to_string(WTERMSIG(status)) + " (" +

@@ -128,6 +128,10 @@ struct LoadOptions {
   char up_axis = 0;          // 0: as the file states (assimp formats), else 'y' or 'z'
   double unit_scale = -1.0;  // metres per file unit; < 0: as the file states (assimp formats), else 1
   bool merge_faces = true;   // merge adjacent coplanar triangles of one object (mesh_merge.h)
+  // assimp formats: how long assimp may take to read a file before it is refused as malformed or
+  // too large (the read is tried first in a forked child with this alarm, scenes/assimp.cpp).
+  // Fuzzers lower it so that a slow input is an error, not a libFuzzer timeout.
+  unsigned import_seconds_max = 300;
   // "" picks: exact sector floors for WAD maps, the navmesh (walkable.h) for OBJ, glTF and assimp
   // scenes, each generator's own; "faces" every upward horizontal face height; "navmesh" Recast.
   std::string floors;

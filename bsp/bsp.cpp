@@ -112,42 +112,73 @@ void traverse(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_t>&
 
 }  // namespace
 
-std::vector<uint8_t> detailPolygons(const Scene& scene, double detail_extent, uint64_t* detail_objects) {
-  std::vector<uint8_t> detail(scene.polygons.size(), 0);
-  if (detail_objects) *detail_objects = 0;
-  if (!(detail_extent > 0.0) || scene.face_object.empty()) return detail;
-  const auto objectOf = [&](const Polygon& p) -> std::optional<uint32_t> {
-    if (p.face_id >= scene.face_object.size()) return std::nullopt;
-    return scene.face_object[p.face_id];
+DetailGroups detailGroups(const Scene& scene, double detail_extent) {
+  DetailGroups out;
+  const size_t n = scene.polygons.size();
+  if (!(detail_extent > 0.0) || n == 0) return out;
+  const auto objectOf = [&](uint32_t polygon) -> uint32_t {
+    if (scene.face_object.empty()) return 0;
+    const uint32_t face = scene.polygons[polygon].face_id;
+    return face < scene.face_object.size() ? scene.face_object[face] : UINT32_MAX;
   };
-  uint32_t objects = 0;
-  for (uint32_t o : scene.face_object) objects = std::max(objects, o + 1);
-  std::vector<Bounds> box(objects);
-  std::vector<uint8_t> seen(objects, 0);
-  for (const Polygon& p : scene.polygons) {
-    const auto o = objectOf(p);
-    if (!o) continue;
-    for (const auto& v : scene.polygonVertices(p)) {
-      if (!seen[*o]) {
-        box[*o].lo = box[*o].hi = v;
-        seen[*o] = 1;
-      }
-      box[*o].lo = glm::min(box[*o].lo, v);
-      box[*o].hi = glm::max(box[*o].hi, v);
+  // Connected pieces: polygons of one object that share an exactly equal vertex (sorting, so -0
+  // and 0 are one position) are joined by union-find with path halving.
+  std::vector<uint32_t> parent(n);
+  for (uint32_t i = 0; i < n; ++i) parent[i] = i;
+  const auto find = [&](uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  struct Corner {
+    uint32_t object;
+    glm::dvec3 p;
+    uint32_t polygon;
+  };
+  std::vector<Corner> corners;
+  corners.reserve(scene.vertices.size());
+  for (uint32_t i = 0; i < n; ++i)
+    for (const glm::dvec3& v : scene.polygonVertices(i)) corners.push_back({objectOf(i), v, i});
+  const auto before = [](const Corner& a, const Corner& b) {
+    if (a.object != b.object) return a.object < b.object;
+    if (a.p.x != b.p.x) return a.p.x < b.p.x;
+    if (a.p.y != b.p.y) return a.p.y < b.p.y;
+    return a.p.z < b.p.z;
+  };
+  std::sort(corners.begin(), corners.end(), before);
+  for (size_t k = 1; k < corners.size(); ++k) {
+    if (before(corners[k - 1], corners[k])) continue;  // equal: the same position in one object
+    const uint32_t a = find(corners[k - 1].polygon), b = find(corners[k].polygon);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<Bounds> box(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t r = find(i);  // the smallest polygon index of its piece: met first
+    if (r == i) box[r].lo = box[r].hi = scene.polygonVertices(i)[0];
+    for (const glm::dvec3& v : scene.polygonVertices(i)) {
+      box[r].lo = glm::min(box[r].lo, v);
+      box[r].hi = glm::max(box[r].hi, v);
     }
   }
   const double limit = detail_extent * scene.eye_height;
-  std::vector<uint8_t> is_detail(objects, 0);
-  for (uint32_t o = 0; o < objects; ++o) {
-    const glm::dvec3 e = box[o].hi - box[o].lo;
-    is_detail[o] = seen[o] && std::max({e.x, e.y, e.z}) < limit;
-    if (is_detail[o] && detail_objects) ++*detail_objects;
+  std::vector<uint32_t> id(n, kStructureGroup);
+  std::vector<uint32_t> objects;
+  out.group.assign(n, kStructureGroup);
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t r = find(i);
+    if (r == i) {
+      const glm::dvec3 e = box[r].hi - box[r].lo;
+      if (std::max({e.x, e.y, e.z}) < limit) {
+        id[r] = static_cast<uint32_t>(out.groups++);
+        objects.push_back(objectOf(i));
+      }
+    }
+    out.group[i] = id[r];
+    out.polygons += id[r] != kStructureGroup;
   }
-  for (size_t i = 0; i < scene.polygons.size(); ++i) {
-    const auto o = objectOf(scene.polygons[i]);
-    detail[i] = o && is_detail[*o];
-  }
-  return detail;
+  if (out.groups == 0) return DetailGroups{};
+  std::sort(objects.begin(), objects.end());
+  out.objects = static_cast<uint64_t>(std::unique(objects.begin(), objects.end()) - objects.begin());
+  return out;
 }
 
 BspTree buildBsp(const Scene& scene, const BspOptions& options) {
@@ -157,9 +188,12 @@ BspTree buildBsp(const Scene& scene, const BspOptions& options) {
   tree.stats.exact_fallbacks = detail::buildBspExact(scene, options, tree);
   tree.scene_hash = sceneHash(scene);
   computeStats(tree, scene.polygons.size());
-  const std::vector<uint8_t> detail = detailPolygons(scene, options.detail_extent, &tree.stats.detail_objects);
-  for (uint8_t d : detail) tree.stats.detail_polygons += d;
-  for (uint32_t p : tree.fragment_polygon) tree.stats.structure_fragments += !detail[p];
+  const DetailGroups detail = detailGroups(scene, options.detail_extent);
+  tree.stats.detail_objects = detail.objects;
+  tree.stats.detail_groups = detail.groups;
+  tree.stats.detail_polygons = detail.polygons;
+  for (uint32_t p : tree.fragment_polygon)
+    tree.stats.structure_fragments += detail.group.empty() || detail.group[p] == kStructureGroup;
   tree.stats.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return tree;
 }

@@ -8,8 +8,10 @@
 // represented exactly while the tree is built: an input polygon's double vertices are projected
 // exactly onto its own plane (so every fragment is exactly planar), straddlers are split at exact
 // plane/segment intersections, and every vertex is classified against every plane exactly
-// (bsp_build_cgal.cpp). After the build only double approximations of the fragment vertices are
-// kept, for drawing: the ORDER was decided exactly. At query time the side of a double eye against
+// (bsp_build_cgal.cpp). A straddler whose vertices on one side all lie within 2^-30 of the scene's
+// extent of the plane loses that sliver instead of being split (drop_slivers). After the build
+// only double approximations of the fragment vertices are kept, for drawing: the ORDER was decided
+// exactly. At query time the side of a double eye against
 // a double plane is an exact sign too (bsp/exact_sign.h). So no point or fragment is ever
 // classified inconsistently, however thin or nearly parallel the input.
 #pragma once
@@ -87,29 +89,50 @@ struct BspOptions {
   // freedoom2 MAP10 at horizontal_weight 0.5: 1.574 -> 1.462 (plain greedy 1.611 -> 1.517); mean
   // N/n over the 35 `bench bsp` scenes 1.233 -> 1.170, the offices unchanged (bsp_build_cgal.cpp).
   bool exact_heuristic_sides = true;
-  // Detail (the idea of Quake's detail brushes, made exact): an input object whose bounding box
-  // is small against a storey (furniture, frames, railings, stairs) must not split the structure
-  // (walls, floors, slabs) it stands in. With detail_extent > 0, every node whose set still holds a
-  // structural fragment takes its plane from a structural fragment; detail fragments are split by
-  // the structure where it crosses them, and their own planes order them only inside the cells the
-  // structure leaves. The tree is the same kind of exact autopartition, so every order stays exact.
-  // An object is detail when the largest side of its bounding box is below detail_extent × the
-  // scene's eye height. Scenes without objects (Scene::face_object empty) are all structure.
-  // 0 = every polygon is structure, the default: on the FZK-Haus IFC house (17,220 polygons in 294
-  // objects) least-crossed N/n is 3.660 with it off, 4.003 at 1 and 3.925 at 2 (walls come as
-  // objects too and the cuts that shatter the house are detail planes inside the rooms' cells),
-  // 3.614 at 4: not enough to earn a default (docs/DESIGN.md, "Real buildings").
+  // A straddler whose vertices on one side all lie within 2^-30 of the scene's extent of the plane
+  // is not split: that side's piece, thinner than the float coordinates a frame is drawn with can
+  // resolve (2^-24 of the extent), is dropped and counted (BspStats::slivers_dropped), and the rest
+  // goes whole to the other side. Double plane coefficients are rounded, so a vertex shared by two
+  // faces of a curved or sloped mesh lies a hair off its neighbour's plane, and an exact split
+  // would cut a sliver off almost every neighbour of a chosen face: on the FZK-Haus house half of
+  // all fragments were such slivers (docs/DESIGN.md, "Slivers"). The order of every fragment kept
+  // is still decided exactly. With it the heuristic counts such vertices as on the plane (whatever
+  // exact_heuristic_sides says), as the build will.
+  bool drop_slivers = true;
+  // Detail (the idea of Quake's detail brushes, made exact; docs/DESIGN.md, "Detail"). A detail
+  // group is a connected piece of one input object (polygons joined by exactly equal vertices;
+  // without Scene::face_object the whole scene is one object) whose bounding box is small against
+  // a storey: its largest side is below detail_extent × the scene's eye height (furniture, frames,
+  // mullions, railings, stair treads). With detail_extent > 0:
+  //  - every node whose set still holds a structural fragment takes its plane from a structural
+  //    fragment: detail never splits walls, floors or slabs; the structure splits a detail group
+  //    only where one of its planes crosses it;
+  //  - a set of detail fragments only, from two or more groups, is divided by a separating plane
+  //    that crosses none of them: an axis-aligned plane in a gap between the groups' bounding boxes,
+  //    else the plane of one group's face with that group wholly behind it. Such a node holds no
+  //    fragment (BspNode::polygon == kSeparatorPolygon); the groups' sides are proved exactly;
+  //  - where no separating plane exists (interpenetrating groups), or inside one group, the set is
+  //    autopartitioned as usual and the sets where separation failed are counted
+  //    (BspStats::detail_inseparable).
+  // Every order stays exact: a separating plane orders what lies on its two sides like any node.
+  // 0 = every polygon is structure, the default: with slivers dropped (drop_slivers) the FZK-Haus
+  // house (17,220 polygons) makes N/n 1.732 without detail and 1.775 at 2, 1.951 at 1 (its
+  // curved furniture is split by its own planes either way; docs/DESIGN.md, "Detail").
   double detail_extent = 0.0;
 };
 
+// BspNode::polygon of a separating node (a plane between detail groups, holding no fragment).
+inline constexpr uint32_t kSeparatorPolygon = UINT32_MAX;
+
 struct BspNode {
-  Plane plane;                  // the node plane: exactly Scene::polygons[polygon].plane
-  uint32_t polygon = 0;         // the input polygon (index into Scene::polygons) the plane comes from
+  Plane plane;                  // the node plane: exactly Scene::polygons[polygon].plane, or a separator's
+  uint32_t polygon = 0;         // the input polygon (index into Scene::polygons) the plane comes from,
+                                // or kSeparatorPolygon
   int32_t front = -1;           // child in n·x > d; -1 = none
   int32_t back = -1;            // child in n·x < d; -1 = none
   int32_t parent = -1;          // -1 for the root
   uint32_t first_fragment = 0;  // fragments [first_fragment, first_fragment + fragment_count) lie in
-  uint32_t fragment_count = 0;  // the node plane (either orientation); count >= 1
+  uint32_t fragment_count = 0;  // the node plane (either orientation); >= 1 except at a separator (0)
   uint32_t depth = 1;           // root = 1
 };
 
@@ -123,9 +146,14 @@ struct BspStats {
   double build_seconds = 0.0;   // wall time of buildBsp
   uint64_t bytes = 0;           // memory of the tree's arrays (vertices, fragments, nodes, indices)
   uint64_t exact_fallbacks = 0; // vertex classifications the double filter could not decide
-  uint64_t detail_objects = 0;  // input objects kept out of the structure (BspOptions::detail_extent)
+  uint64_t detail_objects = 0;  // input objects with a detail group (BspOptions::detail_extent)
+  uint64_t detail_groups = 0;   // detail groups (connected pieces kept out of the structure)
   uint64_t detail_polygons = 0; // their polygons (of input_polygons)
   uint64_t structure_fragments = 0;  // fragments of structural polygons (the rest are detail)
+  uint64_t detail_separators = 0;    // separating nodes (no fragments) between detail groups
+  uint64_t detail_inseparable = 0;   // detail sets of 2+ groups with no separating plane (split instead)
+  uint64_t detail_cuts = 0;          // axis-aligned cutting nodes (no fragments) in detail sets
+  uint64_t slivers_dropped = 0;      // sliver pieces not kept (BspOptions::drop_slivers)
 };
 
 struct BspTree {
@@ -145,9 +173,16 @@ struct BspTree {
   }
 };
 
-// Per scene polygon, 1 when it belongs to a detail object (BspOptions::detail_extent), else 0; and the
-// number of detail objects.
-std::vector<uint8_t> detailPolygons(const Scene& scene, double detail_extent, uint64_t* detail_objects = nullptr);
+// The detail groups of a scene (BspOptions::detail_extent): per polygon its group, numbered from 0
+// in polygon order, or kStructureGroup. Empty `group` when there is no detail at all.
+inline constexpr uint32_t kStructureGroup = UINT32_MAX;
+struct DetailGroups {
+  std::vector<uint32_t> group;
+  uint64_t groups = 0;
+  uint64_t objects = 0;   // input objects with at least one detail group
+  uint64_t polygons = 0;  // polygons in detail groups
+};
+DetailGroups detailGroups(const Scene& scene, double detail_extent);
 
 // Builds the tree over all polygons of the scene. Throws SceneError for a polygon whose plane is
 // not finite or has a zero normal (Scene's loaders never make one). Deterministic for given options.

@@ -55,6 +55,7 @@
 #include <CGAL/intersections.h>
 
 #include <algorithm>
+#include <cassert>
 #include <bit>
 #include <cmath>
 #include <cstdlib>
@@ -162,6 +163,9 @@ class Builder {
   int classify(const Vtx& v, const NodePlane& p);
   void partition(const std::vector<uint32_t>& in, const NodePlane& plane, std::vector<uint32_t>& on,
                  std::vector<uint32_t>& front, std::vector<uint32_t>& back);
+  // The piece of straddler fi on `side` (+1 front, -1 back) of the plane as a new fragment, its
+  // index returned; sides_ holds fi's vertex sides.
+  uint32_t splitOff(uint32_t fi, const NodePlane& plane, int side, std::optional<K::Plane_3>& kplane);
   // The best `k` splitters of the set by the greedy score, best first, into `top`.
   void rankSplitters(const std::vector<uint32_t>& frags, size_t k, std::vector<Ranked>& top);
   uint32_t chooseSplitter(const std::vector<uint32_t>& frags);
@@ -195,13 +199,20 @@ class Builder {
     value = glm::dot(pl.n, p) - pl.d;
     if (value > heuristic_tol_) return 1;
     if (value < -heuristic_tol_) return -1;
-    if (!options_.exact_heuristic_sides) return 0;
+    if (!options_.exact_heuristic_sides || options_.drop_slivers) return 0;  // as the build will: not split
     // An axis-aligned plane (one nonzero normal component, ±1) was evaluated exactly: the products
     // with 0 and ±1 are exact and so is a difference of doubles that is 0 only when they are equal.
     if (int{pl.n.x == 0.0} + int{pl.n.y == 0.0} + int{pl.n.z == 0.0} == 2) return value > 0 ? 1 : value < 0 ? -1 : 0;
     return exact::planeSign(pl.n.x, pl.n.y, pl.n.z, pl.d, p.x, p.y, p.z);
   }
   void emit(uint32_t frag, const NodePlane& plane);
+  struct Task {
+    int32_t node;
+    std::vector<uint32_t> frags;
+  };
+  // Makes `node`'s non-empty sides its children and queues them, the back first so that the front
+  // subtree is built (and its fragments numbered) first.
+  void pushChildren(int32_t node, std::vector<uint32_t>& front, std::vector<uint32_t>& back, std::vector<Task>& stack);
   // Whether the budget pilot_work_max still covers a pilot at a node of m fragments, estimated
   // as pilot_candidates rollouts of m fragments over ~log2(m) + 1 levels each (on freedoom2
   // MAP10 the whole pilot measured 4.1 M for this estimate's unit).
@@ -215,15 +226,34 @@ class Builder {
   // a structural one is left (bsp.h, detail_extent). Sets candidates_restricted_ for the set.
   void restrictCandidates(const std::vector<uint32_t>& frags) {
     candidates_restricted_ = false;
-    if (detail_.empty()) return;
+    if (group_.empty()) return;
     for (uint32_t fi : frags) {
-      if (!detail_[frags_[fi].poly]) {
+      if (group_[frags_[fi].poly] == kStructureGroup) {
         candidates_restricted_ = true;
         return;
       }
     }
   }
-  bool candidate(uint32_t fi) const { return !candidates_restricted_ || !detail_[frags_[fi].poly]; }
+  bool candidate(uint32_t fi) const {
+    return !candidates_restricted_ || group_[frags_[fi].poly] == kStructureGroup;
+  }
+  // A plane that separates the detail groups of a set of detail fragments only (bsp.h,
+  // detail_extent), crossing none: true with the plane and the set's two sides, false when the
+  // set holds structure or a single group, or when no such plane was found (counted).
+  bool separate(const std::vector<uint32_t>& frags, Plane& plane, std::vector<uint32_t>& front,
+                std::vector<uint32_t>& back);
+  bool axisSeparator(Plane& plane);
+  // For a set of detail fragments with no separating plane (or inside one group): an axis-aligned
+  // plane at the median vertex coordinate, when it scores better than the best polygon plane
+  // (which on a curved or hollow mesh crosses its neighbours level after level). Needs separate()
+  // to have found the set detail-only.
+  bool chooseCut(const std::vector<uint32_t>& frags, uint32_t best_polygon_fragment, Plane& plane);
+  double setScore(const std::vector<uint32_t>& frags, const Plane& pl, uint64_t& crossed, bool& two_sided) const;
+  bool detail_only_ = false;  // of the last set separate() looked at
+  uint64_t cuts_ = 0;
+  std::vector<double> coords_;  // scratch of chooseCut
+  bool faceSeparator(const std::vector<uint32_t>& frags, Plane& plane);
+  uint32_t slotOf(uint32_t fi) const { return group_slot_[group_[frags_[fi].poly]]; }
 
   const Scene& scene_;
   const BspOptions& options_;
@@ -243,11 +273,26 @@ class Builder {
   std::vector<double> dist_;      // scratch of partitionApprox
   std::vector<int8_t> vside_;     // scratch of partitionApprox
   uint64_t fallbacks_ = 0;
+  uint64_t slivers_ = 0;      // pieces dropped (BspOptions::drop_slivers)
+  double sliver_tol_ = 0.0;
   uint64_t pilot_work_ = 0;  // fragments of all rollout node sets so far (bounded by pilot_work_max)
   uint64_t refined_ = 0;  // stored vertices rounded from the exact point
   double heuristic_tol_ = 0.0;
-  std::vector<uint8_t> detail_;  // per input polygon (detailPolygons); empty: all structure
+  std::vector<uint32_t> group_;  // per input polygon, its detail group (detailGroups); empty: all structure
   bool candidates_restricted_ = false;
+  // Scratch of separate(): per group its slot in group_box_ (kNoSlot when not in the set).
+  struct GroupBox {
+    glm::dvec3 lo, hi;  // encloses the exact vertices of the group's fragments in the set
+    uint32_t fragments;
+    int8_t side;        // where separate() puts it: -1 back, +1 front
+    bool pos, neg;      // scratch of a face-plane candidate
+  };
+  static constexpr uint32_t kNoSlot = UINT32_MAX;
+  std::vector<uint32_t> group_slot_;
+  std::vector<GroupBox> group_box_;
+  std::vector<uint32_t> group_order_;
+  uint64_t separators_ = 0;
+  uint64_t inseparable_ = 0;
   std::vector<uint32_t> structural_;  // scratch of chooseBySampling and the random heuristic
 };
 
@@ -272,7 +317,7 @@ int Builder::classify(const Vtx& v, const NodePlane& p) {
 
 void Builder::partition(const std::vector<uint32_t>& in, const NodePlane& plane, std::vector<uint32_t>& on,
                         std::vector<uint32_t>& front, std::vector<uint32_t>& back) {
-  const Plane& node = scene_.polygons[plane.poly].plane;
+  const Plane node{{plane.a, plane.b, plane.c}, plane.d};
   std::optional<K::Plane_3> kplane;  // built on the first split only
   for (uint32_t fi : in) {
     const Frag f = frags_[fi];
@@ -298,36 +343,52 @@ void Builder::partition(const std::vector<uint32_t>& in, const NodePlane& plane,
     } else if (!pos) {
       back.push_back(fi);
     } else {
-      if (!kplane) kplane.emplace(plane.a, plane.b, plane.c, -plane.d);
-      // Straddler: walk the loop once, vertices with side >= 0 go front, <= 0 go back, and each
-      // edge whose ends are strictly on opposite sides adds its exact intersection to both.
-      const uint32_t front_first = static_cast<uint32_t>(verts_.size());
-      std::vector<Vtx> back_verts;
-      back_verts.reserve(f.count + 2);
-      for (uint32_t i = 0; i < f.count; ++i) {
-        const uint32_t j = (i + 1) % f.count;
-        const Vtx vi = verts_[f.first + i];
-        if (sides_[i] >= 0) pushVtx(vi);
-        if (sides_[i] <= 0) back_verts.push_back(vi);
-        if (sides_[i] * sides_[j] < 0) {
-          const K::Segment_3 seg(vi.p, verts_[f.first + j].p);
-          const auto hit = CGAL::intersection(seg, *kplane);
-          const EPoint* ip = hit ? boost::get<EPoint>(&*hit) : nullptr;
-          if (!ip) throw std::logic_error("bsp: exact split found no intersection point");
-          const Vtx x = makeVtx(*ip);
-          pushVtx(x);
-          back_verts.push_back(x);
+      // A sliver: when every vertex on one side lies within sliver_tol_ of the plane, that side's
+      // piece lies in a slab thinner than the float coordinates frames are drawn with can resolve
+      // (bsp.h, drop_slivers). It is dropped (counted) and the rest goes whole to its side: no
+      // fragment is made that no pixel could show, and the order of what is kept stays exact.
+      if (options_.drop_slivers) {
+        bool front_thin = true, back_thin = true;
+        for (uint32_t i = 0; i < f.count; ++i) {
+          const glm::dvec3& m = verts_[f.first + i].mid;
+          const double dist = std::abs(plane.a * m.x + plane.b * m.y + plane.c * m.z - plane.d);
+          if (sides_[i] > 0 && !(dist <= sliver_tol_)) front_thin = false;
+          if (sides_[i] < 0 && !(dist <= sliver_tol_)) back_thin = false;
+        }
+        if (front_thin != back_thin) {
+          ++slivers_;
+          splitOff(fi, plane, front_thin ? -1 : 1, kplane);
+          (front_thin ? back : front).push_back(static_cast<uint32_t>(frags_.size() - 1));
+          continue;
         }
       }
-      const uint32_t front_count = static_cast<uint32_t>(verts_.size()) - front_first;
-      pushFrag(Frag{f.poly, front_first, front_count});
-      front.push_back(static_cast<uint32_t>(frags_.size() - 1));
-      const uint32_t back_first = static_cast<uint32_t>(verts_.size());
-      for (auto& v : back_verts) pushVtx(std::move(v));
-      pushFrag(Frag{f.poly, back_first, static_cast<uint32_t>(back_verts.size())});
-      back.push_back(static_cast<uint32_t>(frags_.size() - 1));
+      const uint32_t front_piece = splitOff(fi, plane, 1, kplane);
+      front.push_back(front_piece);
+      back.push_back(splitOff(fi, plane, -1, kplane));
     }
   }
+}
+
+uint32_t Builder::splitOff(uint32_t fi, const NodePlane& plane, int side, std::optional<K::Plane_3>& kplane) {
+  if (!kplane) kplane.emplace(plane.a, plane.b, plane.c, -plane.d);
+  // Walk the loop once: vertices on `side` or on the plane are kept, and each edge whose ends are
+  // strictly on opposite sides adds its exact intersection (sides_ holds the vertices' sides).
+  const Frag f = frags_[fi];
+  const uint32_t first = static_cast<uint32_t>(verts_.size());
+  for (uint32_t i = 0; i < f.count; ++i) {
+    const uint32_t j = (i + 1) % f.count;
+    const Vtx vi = verts_[f.first + i];
+    if (sides_[i] * side >= 0) pushVtx(vi);
+    if (sides_[i] * sides_[j] < 0) {
+      const K::Segment_3 seg(vi.p, verts_[f.first + j].p);
+      const auto hit = CGAL::intersection(seg, *kplane);
+      const EPoint* ip = hit ? boost::get<EPoint>(&*hit) : nullptr;
+      if (!ip) throw std::logic_error("bsp: exact split found no intersection point");
+      pushVtx(makeVtx(*ip));
+    }
+  }
+  pushFrag(Frag{f.poly, first, static_cast<uint32_t>(verts_.size()) - first});
+  return static_cast<uint32_t>(frags_.size() - 1);
 }
 
 // Side of a fragment for the heuristic (doubles with a tolerance): 2 = crossed, 1 = front,
@@ -760,6 +821,206 @@ void Builder::emit(uint32_t fi, const NodePlane& plane) {
   tree_.fragment_orientation.push_back(orientation);
 }
 
+void Builder::pushChildren(int32_t node, std::vector<uint32_t>& front, std::vector<uint32_t>& back,
+                           std::vector<Task>& stack) {
+  const uint32_t depth = tree_.nodes[node].depth;
+  for (int side = 0; side < 2; ++side) {
+    std::vector<uint32_t>& set = side == 0 ? back : front;
+    if (set.empty()) continue;
+    const int32_t child = static_cast<int32_t>(tree_.nodes.size());
+    BspNode c;
+    c.parent = node;
+    c.depth = depth + 1;
+    tree_.nodes.push_back(c);
+    (side == 0 ? tree_.nodes[node].back : tree_.nodes[node].front) = child;
+    stack.push_back(Task{child, std::move(set)});
+    set = {};
+  }
+}
+
+bool Builder::separate(const std::vector<uint32_t>& frags, Plane& plane, std::vector<uint32_t>& front,
+                       std::vector<uint32_t>& back) {
+  if (group_.empty() || frags.size() < 2) return false;
+  group_box_.clear();
+  group_order_.clear();
+  bool detail_only = true;
+  detail_only_ = false;
+  for (uint32_t fi : frags) {
+    const uint32_t g = group_[frags_[fi].poly];
+    if (g == kStructureGroup) {
+      detail_only = false;
+      break;
+    }
+    if (group_slot_[g] == kNoSlot) {
+      group_slot_[g] = static_cast<uint32_t>(group_box_.size());
+      group_box_.push_back({glm::dvec3(INFINITY), glm::dvec3(-INFINITY), 0, 0, false, false});
+      group_order_.push_back(g);
+    }
+    GroupBox& box = group_box_[group_slot_[g]];
+    ++box.fragments;
+    const Frag& f = frags_[fi];
+    for (uint32_t i = 0; i < f.count; ++i) {
+      const Vtx& v = verts_[f.first + i];
+      // mid ± width encloses the exact point; one more ulp outwards covers the rounding of ±.
+      for (int k = 0; k < 3; ++k) {
+        box.lo[k] = std::min(box.lo[k], v.exact_double ? v.mid[k] : std::nextafter(v.mid[k] - v.width[k], -INFINITY));
+        box.hi[k] = std::max(box.hi[k], v.exact_double ? v.mid[k] : std::nextafter(v.mid[k] + v.width[k], INFINITY));
+      }
+    }
+  }
+  bool found = false;
+  detail_only_ = detail_only;
+  if (detail_only && group_box_.size() >= 2) {
+    found = axisSeparator(plane) || faceSeparator(frags, plane);
+    if (!found) ++inseparable_;
+  }
+  if (found) {
+    for (uint32_t fi : frags) (group_box_[slotOf(fi)].side < 0 ? back : front).push_back(fi);
+#ifndef NDEBUG
+    // The rule of a separator, checked exactly: every vertex on its group's side or on the plane.
+    const NodePlane np{plane.n.x, plane.n.y, plane.n.z, plane.d, kSeparatorPolygon};
+    for (uint32_t fi : frags)
+      for (uint32_t i = 0; i < frags_[fi].count; ++i)
+        assert(classify(verts_[frags_[fi].first + i], np) * group_box_[slotOf(fi)].side >= 0);
+#endif
+  }
+  for (uint32_t g : group_order_) group_slot_[g] = kNoSlot;
+  return found;
+}
+
+// An axis-aligned plane in a gap between the groups' boxes: per axis (y first: a horizontal plane
+// adds no line to the PFD regions at eye height), the groups sorted by their low side, and a gap
+// wherever every group so far ends at or before the next one begins. The most balanced gap wins
+// (by fragments). The boxes enclose the exact vertices, so the sides need no further test.
+bool Builder::axisSeparator(Plane& plane) {
+  const size_t g = group_box_.size();
+  std::vector<uint32_t> order(g);
+  double best_score = INFINITY;
+  int best_axis = -1;
+  double best_c = 0.0;
+  size_t best_k = 0;
+  size_t total = 0;
+  for (const GroupBox& b : group_box_) total += b.fragments;
+  const auto sortAlong = [&](int axis) {
+    for (uint32_t i = 0; i < g; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return group_box_[a].lo[axis] != group_box_[b].lo[axis] ? group_box_[a].lo[axis] < group_box_[b].lo[axis] : a < b;
+    });
+  };
+  for (int axis : {1, 0, 2}) {
+    sortAlong(axis);
+    double reach = -INFINITY;
+    size_t below = 0;
+    for (size_t k = 0; k + 1 < g; ++k) {
+      reach = std::max(reach, group_box_[order[k]].hi[axis]);
+      below += group_box_[order[k]].fragments;
+      const double next = group_box_[order[k + 1]].lo[axis];
+      if (!(reach <= next)) continue;
+      const double score = std::abs(2.0 * static_cast<double>(below) - static_cast<double>(total));
+      if (score < best_score) {
+        best_score = score;
+        best_axis = axis;
+        best_k = k;
+        best_c = reach + 0.5 * (next - reach);  // within [reach, next]: both are finite here
+      }
+    }
+  }
+  if (best_axis < 0) return false;
+  plane.n = glm::dvec3(0.0);
+  plane.n[best_axis] = 1.0;
+  plane.d = best_c;
+  // By position in the sweep, not by the box against c: groups flat in the plane itself may go
+  // either way, and both sides must keep at least one group.
+  sortAlong(best_axis);
+  for (size_t k = 0; k < g; ++k) group_box_[order[k]].side = k <= best_k ? -1 : 1;
+  return true;
+}
+
+// The plane of one group's face with that group wholly behind it (a face of its hull) and every
+// other group wholly on one side; up to kFaceCandidates faces spread over the set are tried, every
+// vertex classified exactly. The most balanced such plane wins.
+bool Builder::faceSeparator(const std::vector<uint32_t>& frags, Plane& plane) {
+  constexpr size_t kFaceCandidates = 32;
+  const size_t stride = std::max<size_t>(1, frags.size() / kFaceCandidates);
+  size_t total = 0;
+  for (const GroupBox& b : group_box_) total += b.fragments;
+  double best_score = INFINITY;
+  uint32_t best_poly = kSeparatorPolygon;
+  for (size_t c = 0; c < frags.size(); c += stride) {
+    const uint32_t poly = frags_[frags[c]].poly;
+    const Plane& pl = scene_.polygons[poly].plane;
+    const NodePlane np{pl.n.x, pl.n.y, pl.n.z, pl.d, poly};
+    for (GroupBox& b : group_box_) b.pos = b.neg = false;
+    bool straddles = false;
+    for (size_t i = 0; i < frags.size() && !straddles; ++i) {
+      const Frag& f = frags_[frags[i]];
+      GroupBox& b = group_box_[slotOf(frags[i])];
+      for (uint32_t k = 0; k < f.count && !straddles; ++k) {
+        const int s = classify(verts_[f.first + k], np);
+        b.pos = b.pos || s > 0;
+        b.neg = b.neg || s < 0;
+        straddles = b.pos && b.neg;
+      }
+    }
+    if (straddles || group_box_[slotOf(frags[c])].pos) continue;
+    size_t in_front = 0;
+    for (const GroupBox& b : group_box_) in_front += b.pos ? b.fragments : 0;
+    if (in_front == 0) continue;
+    const double score = std::abs(2.0 * static_cast<double>(in_front) - static_cast<double>(total));
+    if (score < best_score) {
+      best_score = score;
+      best_poly = poly;
+      for (GroupBox& b : group_box_) b.side = b.pos ? 1 : -1;
+    }
+  }
+  if (best_poly == kSeparatorPolygon) return false;
+  plane = scene_.polygons[best_poly].plane;
+  return true;
+}
+
+double Builder::setScore(const std::vector<uint32_t>& frags, const Plane& pl, uint64_t& crossed, bool& two_sided) const {
+  int64_t front = 0, back = 0;
+  crossed = 0;
+  for (uint32_t fi : frags) {
+    const int side = heuristicSide(pl, frags_[fi]);
+    crossed += side == 2;
+    front += side == 1;
+    back += side == -1;
+  }
+  two_sided = crossed > 0 || (front > 0 && back > 0);
+  return options_.split_weight * static_cast<double>(crossed) + static_cast<double>(std::abs(front - back));
+}
+
+bool Builder::chooseCut(const std::vector<uint32_t>& frags, uint32_t best_polygon_fragment, Plane& plane) {
+  if (!detail_only_ || frags.size() < 2) return false;
+  uint64_t crossed = 0;
+  bool two_sided = false;
+  const double polygon_score =
+      setScore(frags, scene_.polygons[frags_[best_polygon_fragment].poly].plane, crossed, two_sided);
+  if (crossed == 0) return false;  // a free polygon plane costs nothing
+  double best = polygon_score;
+  bool found = false;
+  for (int axis : {1, 0, 2}) {
+    coords_.clear();
+    for (uint32_t fi : frags)
+      for (uint32_t i = 0; i < frags_[fi].count; ++i) coords_.push_back(hv_[frags_[fi].first + i][axis]);
+    const auto mid = coords_.begin() + static_cast<std::ptrdiff_t>(coords_.size() / 2);
+    std::nth_element(coords_.begin(), mid, coords_.end());
+    Plane cut;
+    cut.n = glm::dvec3(0.0);
+    cut.n[axis] = 1.0;
+    cut.d = *mid;  // a vertex coordinate: rings of vertices on it are not split
+    uint64_t c = 0;
+    const double score = setScore(frags, cut, c, two_sided);
+    if (score < best && two_sided) {
+      best = score;
+      plane = cut;
+      found = true;
+    }
+  }
+  return found;
+}
+
 uint64_t Builder::run() {
   const size_t n = scene_.polygons.size();
   if (n == 0) return 0;
@@ -770,13 +1031,18 @@ uint64_t Builder::run() {
                                   std::abs(b.lo.y), std::abs(b.lo.z), std::abs(b.hi.x), std::abs(b.hi.y),
                                   std::abs(b.hi.z)});
   heuristic_tol_ = 1e-9 * extent;
+  // 2^-30 of the extent: 64 times below the float resolution of the frames' vertices (2^-24 of
+  // the extent), 2^22 times above the double rounding that puts a shared vertex off its
+  // neighbour's plane (2^-52 of it).
+  sliver_tol_ = 0x1p-30 * extent;
 
   verts_.reserve(scene_.vertices.size() * 2);
   hv_.reserve(scene_.vertices.size() * 2);
   frags_.reserve(n * 2);
   boxes_.reserve(n * 2);
-  detail_ = detailPolygons(scene_, options_.detail_extent);
-  if (std::find(detail_.begin(), detail_.end(), uint8_t{1}) == detail_.end()) detail_.clear();
+  DetailGroups groups = detailGroups(scene_, options_.detail_extent);
+  group_ = std::move(groups.group);
+  group_slot_.assign(groups.groups, kNoSlot);
   std::vector<uint32_t> all(n);
   for (size_t i = 0; i < n; ++i) {
     const Polygon& poly = scene_.polygons[i];
@@ -795,10 +1061,6 @@ uint64_t Builder::run() {
     all[i] = static_cast<uint32_t>(i);
   }
 
-  struct Task {
-    int32_t node;
-    std::vector<uint32_t> frags;
-  };
   std::vector<Task> stack;
   tree_.nodes.emplace_back();
   tree_.root = 0;
@@ -807,6 +1069,21 @@ uint64_t Builder::run() {
   while (!stack.empty()) {
     Task task = std::move(stack.back());
     stack.pop_back();
+    on.clear();
+    front.clear();
+    back.clear();
+    Plane separator;
+    if (separate(task.frags, separator, front, back)) {
+      task.frags = {};
+      BspNode& node = tree_.nodes[task.node];
+      node.plane = separator;
+      node.polygon = kSeparatorPolygon;
+      node.first_fragment = static_cast<uint32_t>(tree_.fragments.size());
+      node.fragment_count = 0;
+      ++separators_;
+      pushChildren(task.node, front, back, stack);
+      continue;
+    }
     // Not with free_first: its rule (a free plane first) would be overruled by the rollouts.
     const bool pilot = options_.heuristic == SplitHeuristic::kLeastCrossed && options_.pilot_candidates > 1 &&
                        !options_.free_first &&
@@ -814,12 +1091,33 @@ uint64_t Builder::run() {
                        tree_.nodes[task.node].depth <= options_.pilot_depth_max &&
                        pilotAffordable(task.frags.size());
     const uint32_t splitter = pilot ? choosePilot(task.frags) : chooseSplitter(task.frags);
+    Plane cut;
+    if (chooseCut(task.frags, splitter, cut)) {
+      const NodePlane cut_plane{cut.n.x, cut.n.y, cut.n.z, cut.d, kSeparatorPolygon};
+      partition(task.frags, cut_plane, on, front, back);
+      // Fragments in the cut plane go to the side they face: either side orders them right.
+      for (uint32_t fi : on) (glm::dot(scene_.polygons[frags_[fi].poly].plane.n, cut.n) > 0.0 ? front : back).push_back(fi);
+      on.clear();
+      if (front.empty() || back.empty()) {
+        // The exact sides put everything on one side (nothing was split): a polygon plane instead.
+        front.clear();
+        back.clear();
+      }
+    }
+    if (!front.empty()) {
+      task.frags = {};
+      BspNode& node = tree_.nodes[task.node];
+      node.plane = cut;
+      node.polygon = kSeparatorPolygon;
+      node.first_fragment = static_cast<uint32_t>(tree_.fragments.size());
+      node.fragment_count = 0;
+      ++cuts_;
+      pushChildren(task.node, front, back, stack);
+      continue;
+    }
     const uint32_t poly = frags_[splitter].poly;
     const Plane& pl = scene_.polygons[poly].plane;
     const NodePlane plane{pl.n.x, pl.n.y, pl.n.z, pl.d, poly};
-    on.clear();
-    front.clear();
-    back.clear();
     partition(task.frags, plane, on, front, back);
     task.frags = {};  // release before the children's sets grow
     // The splitter first, so a node's first fragment lies on the node's own input polygon.
@@ -832,21 +1130,12 @@ uint64_t Builder::run() {
     node.first_fragment = static_cast<uint32_t>(tree_.fragments.size());
     node.fragment_count = static_cast<uint32_t>(on.size());
     for (uint32_t fi : on) emit(fi, plane);
-    const uint32_t depth = node.depth;
-    // Back pushed first so the front subtree is built (and its fragments numbered) first.
-    for (int side = 0; side < 2; ++side) {
-      std::vector<uint32_t>& set = side == 0 ? back : front;
-      if (set.empty()) continue;
-      const int32_t child = static_cast<int32_t>(tree_.nodes.size());
-      BspNode c;
-      c.parent = task.node;
-      c.depth = depth + 1;
-      tree_.nodes.push_back(c);
-      (side == 0 ? tree_.nodes[task.node].back : tree_.nodes[task.node].front) = child;
-      stack.push_back(Task{child, std::move(set)});
-      set = {};
-    }
+    pushChildren(task.node, front, back, stack);
   }
+  tree_.stats.detail_separators = separators_;
+  tree_.stats.detail_inseparable = inseparable_;
+  tree_.stats.detail_cuts = cuts_;
+  tree_.stats.slivers_dropped = slivers_;
   return fallbacks_;
 }
 

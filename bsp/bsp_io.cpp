@@ -220,7 +220,7 @@ BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& con
     n.depth = r.get<uint32_t>();
   }
   // Structure: root 0 (or none), every other node's parent comes before it and links back to it,
-  // children come after their parent; node fragment ranges are non-empty and disjoint and cover
+  // children come after their parent; node fragment ranges are non-empty (but at separators) and disjoint and cover
   // every fragment (checked in node order after sorting by first fragment is unnecessary: the
   // writer numbers them in build order, so they are checked as a tiling in any order below).
   if (nn == 0 ? tree.root != -1 : tree.root != 0) r.fail("bad root");
@@ -240,7 +240,9 @@ BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& con
       if (c != -1 && (c <= idx || static_cast<uint64_t>(c) >= nn || tree.nodes[static_cast<size_t>(c)].parent != idx))
         r.fail("node " + std::to_string(i) + ": bad child");
     if (n.front != -1 && n.front == n.back) r.fail("node " + std::to_string(i) + ": bad child");
-    if (n.fragment_count == 0 || static_cast<uint64_t>(n.first_fragment) + n.fragment_count > nf)
+    // Only a separator (a plane between detail groups, bsp.h) holds no fragment.
+    if ((n.fragment_count == 0) != (n.polygon == kSeparatorPolygon) ||
+        static_cast<uint64_t>(n.first_fragment) + n.fragment_count > nf)
       r.fail("node " + std::to_string(i) + ": fragments out of range");
     for (uint32_t f = n.first_fragment; f < n.first_fragment + n.fragment_count; ++f) {
       if (covered[f]) r.fail("node " + std::to_string(i) + ": fragment listed twice");

@@ -146,7 +146,12 @@ int runBspBench(const BspBenchArgs& args) {
                          {"ratio", stats.ratio},
                          {"structure_fragments", stats.structure_fragments},
                          {"detail_objects", stats.detail_objects},
+                         {"detail_groups", stats.detail_groups},
                          {"detail_polygons", stats.detail_polygons},
+                         {"detail_separators", stats.detail_separators},
+                         {"detail_inseparable", stats.detail_inseparable},
+                         {"detail_cuts", stats.detail_cuts},
+                         {"slivers_dropped", stats.slivers_dropped},
                          {"build_cpu_seconds", cpu_med},
                          {"nodes", stats.nodes},
                          {"depth_max", stats.depth_max},
@@ -255,8 +260,8 @@ void addBspBench(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--horizontal-weight", args->horizontal_weight,
                   "Least-crossed: factor on the crossing count of a horizontal plane (exact scoring only)");
   sub->add_option("--detail-extent", args->detail_extent,
-                  "Objects whose bounding box is smaller than this many eye heights are detail: they never split "
-                  "the structure (0 = all structure)")
+                  "Connected pieces of an object whose bounding box is smaller than this many eye heights are "
+                  "detail: they never split the structure and are ordered by separating planes (0 = all structure)")
       ->check(CLI::NonNegativeNumber);
   addLoadOptions(*sub, args->load);
   sub->add_flag("--json", args->json, "Print JSON");

@@ -170,6 +170,8 @@ struct PfdStats {
   uint64_t visibility_tests = 0;   // HFD: fragment-versus-region queries
   uint64_t visibility_rays = 0;    // HFD: occlusion rays cast
   uint64_t hidden_rejected = 0;    // HFD: fragments dropped from a list as hidden
+  uint64_t visibility_witnessed = 0;  // HFD: tests saved by an ancestor's witness (not in tree files)
+  uint64_t visibility_hidden_rays = 0;  // HFD: rays of the tests answered hidden (not in tree files)
   uint64_t bytes = 0;             // the tree's arrays
   double build_seconds = 0.0;
 };

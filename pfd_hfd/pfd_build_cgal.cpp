@@ -451,6 +451,8 @@ class Builder {
     unresolved_stamp_.assign(nn, 0);
     test_plane_.assign(lines_.size(), UINT32_MAX);
     hidden_.assign(bsp.fragments.size(), 0);
+    witness_.assign(bsp.fragments.size(), glm::dvec2(0.0));
+    has_witness_.assign(bsp.fragments.size(), 0);
     // Every line is classified against the whole region once: a line that does not cross it has
     // the same side in every sub-region, for good (never logged, never undone). Only the others
     // ("varying") are ever classified again, so the work per node follows them, not N.
@@ -501,6 +503,7 @@ class Builder {
   Counters counters;
   VisibilityCounters vis_counters;
   uint64_t hidden_rejected = 0;
+  uint64_t visibility_witnessed = 0;
   uint64_t varying_count = 0;
   std::vector<double> leaf_areas;
   double leaf_bound_tests = 0.0;  // Σ over leaves of area × tested lines bounding the leaf
@@ -533,7 +536,7 @@ class Builder {
     return s;
   }
 
-  void undo(size_t mark, size_t hidden_mark) {
+  void undo(size_t mark, size_t hidden_mark, size_t witness_mark) {
     while (log_.size() > mark) {
       side_[log_.back()] = kUnknown;
       log_.pop_back();
@@ -542,6 +545,61 @@ class Builder {
       hidden_[hidden_log_.back()] = 0;
       hidden_log_.pop_back();
     }
+    while (witness_log_.size() > witness_mark) {
+      const WitnessEntry& w = witness_log_.back();
+      witness_[w.fragment] = w.point;
+      has_witness_[w.fragment] = w.had;
+      witness_log_.pop_back();
+    }
+  }
+
+  // HFD: whether the eye that saw f from an ancestor region lies in r (a closed convex piece of
+  // it, by double orientation tests): then f is visible from r with no new rays.
+  bool witnessedIn(uint32_t f, const Region& r) {
+    if (!has_witness_[f]) return false;
+    const glm::dvec2 p = witness_[f];
+    for (const std::vector<glm::dvec2>& ring : rings(r)) {
+      const size_t n = ring.size();
+      if (n < 3) continue;
+      bool pos = false, neg = false;
+      for (size_t i = 0; i < n && !(pos && neg); ++i) {
+        const glm::dvec2 a = ring[i], b = ring[(i + 1) % n];
+        const double c = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+        pos = pos || c > 0.0;
+        neg = neg || c < 0.0;
+      }
+      if (!(pos && neg)) return true;
+    }
+    return false;
+  }
+
+  void setWitness(uint32_t f, const glm::dvec2& p) {
+    witness_log_.push_back({f, has_witness_[f], witness_[f]});
+    witness_[f] = p;
+    has_witness_[f] = 1;
+  }
+
+  // HFD: of `ids`, those not hidden from an ancestor into to_test_, except those an ancestor's
+  // witness already shows visible from r, which go to `seen` (when given) or are dropped.
+  void collectTests(std::span<const uint32_t> ids, const Region& r, std::vector<uint32_t>* seen) {
+    to_test_.clear();
+    for (uint32_t f : ids) {
+      if (hidden_[f]) continue;
+      if (witnessedIn(f, r)) {
+        ++visibility_witnessed;
+        if (seen) seen->push_back(f);
+        continue;
+      }
+      to_test_.push_back(f);
+    }
+  }
+
+  void runTests(std::span<const uint32_t> batch, const Region& r) {
+    results_.assign(batch.size(), 0);
+    witness_scratch_.assign(batch.size(), glm::dvec2(0.0));
+    visibleBatch(*options_.visibility, batch, rings(r), height_, results_, witness_scratch_, vis_counters);
+    for (size_t i = 0; i < batch.size(); ++i)
+      if (results_[i]) setWitness(batch[i], witness_scratch_[i]);
   }
 
   // The crossing line (if any) among the orientation-0 fragments of a node; UINT32_MAX if none.
@@ -860,17 +918,23 @@ class Builder {
   // HFD: the fragments of `ids` visible from r, in order; the hidden ones are remembered for the
   // rest of this root-to-node path and never tested again below.
   void filterVisible(std::span<const uint32_t> ids, const Region& r, std::vector<uint32_t>& out) {
-    to_test_.clear();
-    for (uint32_t f : ids)
-      if (!hidden_[f]) to_test_.push_back(f);
-    results_.assign(to_test_.size(), 0);
-    visibleBatch(*options_.visibility, to_test_, rings(r), height_, results_, vis_counters);
-    for (size_t i = 0; i < to_test_.size(); ++i) {
-      if (results_[i]) {
-        out.push_back(to_test_[i]);
-      } else {
-        markHidden(to_test_[i]);
-        ++hidden_rejected;
+    // Witnessed fragments first into `seen`, then merged back in list order.
+    seen_.clear();
+    collectTests(ids, r, &seen_);
+    runTests(to_test_, r);
+    size_t a = 0, b = 0;
+    for (uint32_t f : ids) {
+      if (a < seen_.size() && seen_[a] == f) {
+        out.push_back(f);
+        ++a;
+      } else if (b < to_test_.size() && to_test_[b] == f) {
+        if (results_[b]) {
+          out.push_back(f);
+        } else {
+          markHidden(f);
+          ++hidden_rejected;
+        }
+        ++b;
       }
     }
   }
@@ -882,6 +946,10 @@ class Builder {
     to_test_.clear();
     for (uint32_t f : ids) {
       if (hidden_[f]) continue;
+      if (witnessedIn(f, r)) {
+        ++visibility_witnessed;
+        return false;  // seen from a point of r: not all hidden, whatever the others are
+      }
       if (options_.drop_back_faces) {
         const int8_t o = bsp_.fragment_orientation[f];
         const uint32_t node_line = static_cast<uint32_t>(&nodeOf(f) - bsp_.nodes.data());
@@ -893,9 +961,7 @@ class Builder {
     constexpr size_t kBatch = 32;
     for (size_t start = 0; start < to_test_.size(); start += kBatch) {
       const size_t n = std::min(kBatch, to_test_.size() - start);
-      results_.assign(n, 0);
-      visibleBatch(*options_.visibility, std::span<const uint32_t>(to_test_.data() + start, n), rings(r), height_,
-                   results_, vis_counters);
+      runTests(std::span<const uint32_t>(to_test_.data() + start, n), r);
       bool any = false;
       for (size_t i = 0; i < n; ++i) {
         if (results_[i]) any = true;
@@ -1374,18 +1440,18 @@ class Builder {
     clipRegion(r, lines_[line], counters, &front, &back);
     r.clear();
     r.shrink_to_fit();
-    const size_t mark = log_.size(), hidden_mark = hidden_log_.size();
+    const size_t mark = log_.size(), hidden_mark = hidden_log_.size(), witness_mark = witness_log_.size();
     side_[line] = 1;
     log_.push_back(line);
     path_lines_.push_back(lines_[line].canon);
     path_sides_.push_back(1);
     const int32_t f = build(std::move(front), stack, depth + 1);
-    undo(mark, hidden_mark);
+    undo(mark, hidden_mark, witness_mark);
     side_[line] = -1;
     log_.push_back(line);
     path_sides_.back() = -1;
     const int32_t b = build(std::move(back), std::move(stack), depth + 1);
-    undo(mark, hidden_mark);
+    undo(mark, hidden_mark, witness_mark);
     path_lines_.pop_back();
     path_sides_.pop_back();
     if (plan_.active && plan_.owner == index) plan_.active = false;
@@ -1417,6 +1483,18 @@ class Builder {
   std::vector<std::pair<uint32_t, uint32_t>> vary_range_, frag_range_;
   std::vector<uint8_t> hidden_;      // HFD: hidden from an ancestor region on the current path
   std::vector<uint32_t> hidden_log_;
+  // HFD: per fragment, the eye that last saw it on the current path (docs/DESIGN.md, "HFD tree":
+  // a witness in a sub-region keeps the fragment with no new rays), with an undo log.
+  struct WitnessEntry {
+    uint32_t fragment;
+    uint8_t had;
+    glm::dvec2 point;
+  };
+  std::vector<glm::dvec2> witness_;
+  std::vector<uint8_t> has_witness_;
+  std::vector<WitnessEntry> witness_log_;
+  std::vector<glm::dvec2> witness_scratch_;
+  std::vector<uint32_t> seen_;
   std::vector<uint32_t> frag_node_;
   std::vector<uint32_t> scratch_, run_scratch_, to_test_, node_frags_;
   std::vector<uint8_t> results_;
@@ -1577,6 +1655,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.visibility_tests = builder.vis_counters.tests;
   s.visibility_rays = builder.vis_counters.rays;
   s.hidden_rejected = builder.hidden_rejected;
+  s.visibility_witnessed = builder.visibility_witnessed;
+  s.visibility_hidden_rays = builder.vis_counters.hidden_rays;
   double entropy = 0.0;
   if (s.region_area > 0.0) {
     for (double a : builder.leaf_areas) {

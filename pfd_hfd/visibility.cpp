@@ -348,10 +348,10 @@ struct VisibilityScene::Impl {
   }
 
   // Occlusion of up to kPacket segments at once (one Embree packet: the rays of one test run from
-  // one region to one fragment, coherent enough for packet traversal). Returns true when some
-  // segment k < n is unblocked.
+  // one region to one fragment, coherent enough for packet traversal). Returns the first segment
+  // k < n that is unblocked, or -1.
   static constexpr int kPacket = 16;
-  bool anyClear16(const glm::dvec3* eyes, const glm::dvec3* targets, const double* tfar, int n) const {
+  int firstClear16(const glm::dvec3* eyes, const glm::dvec3* targets, const double* tfar, int n) const {
     RTCRay16 ray;
     alignas(64) int valid[kPacket];
     for (int k = 0; k < kPacket; ++k) {
@@ -374,8 +374,8 @@ struct VisibilityScene::Impl {
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     rtcOccluded16(valid, scene, &context, &ray);
     for (int k = 0; k < n; ++k)
-      if (!(ray.tfar[k] < 0.0f)) return true;
-    return false;
+      if (!(ray.tfar[k] < 0.0f)) return k;
+    return -1;
   }
 };
 
@@ -511,7 +511,7 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
 }
 
 bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region,
-                                        double height, VisibilityCounters& counters) const {
+                                        double height, VisibilityCounters& counters, glm::dvec2* witness) const {
   const Impl& s = *impl_;
   const VisibilityOptions& opt = s.options;
   ++counters.tests;
@@ -623,6 +623,8 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     ++counters.rays;
     return s.blocked(e, p, tfar, hit, tnear) ? 0 : 1;
   };
+
+  glm::dvec3 clear_eye{0.0};  // the eye of the unblocked ray that answers "visible" (the witness)
 
   // ---- 0. proof by one occluder per sub-cone (exact, used after the first packet) ----
   // The segments from a convex region piece R (at the height) to a convex part T of the inset
@@ -737,6 +739,7 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
         const int r = castClear(e, p, &hit, tnear);
         if (r < 0) return 0;
         --budget;
+        if (r == 1 && hits == 0) clear_eye = e;
         if (r == 1) return hits == 0 ? 2 : 0;  // past the first blocker: not a sampled ray
         const uint32_t o = s.fragment_outline[hit.fragment];
         // The next blocker along the same ray: a relative step past this hit, 1e-6 of the ray,
@@ -868,24 +871,31 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       }
       if (n == 0) break;
       counters.rays += static_cast<uint64_t>(n);
-      if (s.anyClear16(pe, pt, pf, n)) return true;
+      const int clear = s.firstClear16(pe, pt, pf, n);
+      if (clear >= 0) {
+        clear_eye = pe[clear];
+        return true;
+      }
     }
     return false;
   };
   if (uniformPackets(1)) {
     ++counters.visible;
+    if (witness) *witness = {clear_eye.x, clear_eye.z};
     return true;
   }
   if (opt.proof_rays > 0) {
     const int proof = proveHidden();
     if (proof == 2) {
       ++counters.visible;
+      if (witness) *witness = {clear_eye.x, clear_eye.z};
       return true;
     }
     if (proof == 1) return false;
   }
   if (uniformPackets(std::numeric_limits<uint64_t>::max())) {
     ++counters.visible;
+    if (witness) *witness = {clear_eye.x, clear_eye.z};
     return true;
   }
 
@@ -973,6 +983,7 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     --budget;
     if (r == 1) {
       ++counters.visible;
+      if (witness) *witness = {eye.x, eye.z};
       return true;
     }
     if (pr.depth >= kMaxStepDepth || budget == 0) continue;

@@ -51,10 +51,12 @@ struct VisibilityCounters {
   uint64_t tests = 0;    // fragment-versus-region queries
   uint64_t rays = 0;     // occlusion rays cast
   uint64_t visible = 0;  // queries answered "visible"
+  uint64_t hidden_rays = 0;  // rays of the queries answered "hidden" (counted by visibleBatch)
   void add(const VisibilityCounters& o) {
     tests += o.tests;
     rays += o.rays;
     visible += o.visible;
+    hidden_rays += o.hidden_rays;
   }
 };
 
@@ -70,8 +72,10 @@ class VisibilityScene {
   // True when some sampled ray from `region` (convex (x, z) pieces at y = height, any
   // orientation; zero-area pieces ignored; must not be empty) to fragment `fragment` of the BSP
   // is unblocked. False means hidden from every sample (the one approximation of the HFD tree).
+  // When visible and `witness` is given, *witness is the (x, z) of that ray's eye: a point of the
+  // region from which the fragment is seen, so every sub-region holding it sees it too.
   bool visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region, double height,
-                         VisibilityCounters& counters) const;
+                         VisibilityCounters& counters, glm::dvec2* witness = nullptr) const;
 
   const VisibilityOptions& options() const;
 

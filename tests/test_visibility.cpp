@@ -323,6 +323,30 @@ TEST(Visibility, Deterministic) {
   EXPECT_EQ(d.options().seed, 99u);
 }
 
+// The witness of a "visible" answer is a point of the region, and the fragment is visible from a
+// small square around it (the sub-regions the HFD build skips testing), over a room grid.
+TEST(Visibility, WitnessLiesInTheRegionAndSeesTheFragment) {
+  const Scene scene = roomGrid(5, 3);
+  const BspTree bsp = buildBsp(scene);
+  const VisibilityScene vis = VisibilityScene::build(bsp);
+  const Region region{{{1, 1}, {12, 1}, {12, 8}, {1, 8}}};
+  int visible = 0;
+  for (uint32_t f = 0; f < bsp.fragments.size(); ++f) {
+    VisibilityCounters c;
+    glm::dvec2 w(-1e9);
+    if (!vis.visibleFromRegion(f, region, 1.5, c, &w)) continue;
+    ++visible;
+    EXPECT_GE(w.x, 1.0) << f;
+    EXPECT_LE(w.x, 12.0) << f;
+    EXPECT_GE(w.y, 1.0) << f;
+    EXPECT_LE(w.y, 8.0) << f;
+    const double e = 1e-3;
+    const Region around{{{w.x - e, w.y - e}, {w.x + e, w.y - e}, {w.x + e, w.y + e}, {w.x - e, w.y + e}}};
+    EXPECT_TRUE(vis.visibleFromRegion(f, around, 1.5, c)) << "fragment " << f << " at (" << w.x << ", " << w.y << ")";
+  }
+  EXPECT_GT(visible, 10);
+}
+
 TEST(Visibility, DegenerateRegionsAndBackFaces) {
   const TwoRooms r = twoRooms(0.2);
   const BspTree bsp = buildBsp(r.scene);

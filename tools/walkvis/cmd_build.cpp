@@ -226,7 +226,7 @@ int runBuild(const BuildArgs& args) {
   j["root_search_lines"] = args.root_search_lines;
   j["root_search_work"] = args.root_search_work;
   j["total_bytes"] = used;
-  uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0;
+  uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0, witnessed = 0, hidden_rays = 0;
   auto trees = nlohmann::ordered_json::array();
   // Query timing costs a BSP traversal per eye (tens of µs at 20k fragments), so the eyes are
   // spread over the cells: at most 2,000 per cell and about 100,000 for the file (freedoom2 MAP12,
@@ -279,7 +279,11 @@ int runBuild(const BuildArgs& args) {
         e["visibility_tests"] = s.visibility_tests;
         e["visibility_rays"] = s.visibility_rays;
         e["hidden_rejected"] = s.hidden_rejected;
+        e["visibility_witnessed"] = s.visibility_witnessed;
+        e["visibility_hidden_rays"] = s.visibility_hidden_rays;
       }
+      witnessed += s.visibility_witnessed;
+      hidden_rays += s.visibility_hidden_rays;
       vis_tests += s.visibility_tests;
       vis_rays += s.visibility_rays;
       rejected += s.hidden_rejected;
@@ -307,6 +311,8 @@ int runBuild(const BuildArgs& args) {
     j["visibility_tests"] = vis_tests;
     j["visibility_rays"] = vis_rays;
     j["hidden_rejected"] = rejected;
+    j["visibility_witnessed"] = witnessed;
+    j["visibility_hidden_rays"] = hidden_rays;
     j["rays_per_second"] = trees_seconds > 0 ? static_cast<double>(vis_rays) / trees_seconds : 0.0;
   }
   if (args.json) {

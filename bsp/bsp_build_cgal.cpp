@@ -213,6 +213,17 @@ class Builder {
   // Makes `node`'s non-empty sides its children and queues them, the back first so that the front
   // subtree is built (and its fragments numbered) first.
   void pushChildren(int32_t node, std::vector<uint32_t>& front, std::vector<uint32_t>& back, std::vector<Task>& stack);
+  // Makes task's node a separating or cutting node (plane, no fragments) over the given sides.
+  void emptyNode(Task& task, const Plane& plane, std::vector<uint32_t>& front, std::vector<uint32_t>& back,
+                 std::vector<Task>& stack) {
+    task.frags = {};
+    BspNode& node = tree_.nodes[task.node];
+    node.plane = plane;
+    node.polygon = kSeparatorPolygon;
+    node.first_fragment = static_cast<uint32_t>(tree_.fragments.size());
+    node.fragment_count = 0;
+    pushChildren(task.node, front, back, stack);
+  }
   // Whether the budget pilot_work_max still covers a pilot at a node of m fragments, estimated
   // as pilot_candidates rollouts of m fragments over ~log2(m) + 1 levels each (on freedoom2
   // MAP10 the whole pilot measured 4.1 M for this estimate's unit).
@@ -1074,14 +1085,8 @@ uint64_t Builder::run() {
     back.clear();
     Plane separator;
     if (separate(task.frags, separator, front, back)) {
-      task.frags = {};
-      BspNode& node = tree_.nodes[task.node];
-      node.plane = separator;
-      node.polygon = kSeparatorPolygon;
-      node.first_fragment = static_cast<uint32_t>(tree_.fragments.size());
-      node.fragment_count = 0;
       ++separators_;
-      pushChildren(task.node, front, back, stack);
+      emptyNode(task, separator, front, back, stack);
       continue;
     }
     // Not with free_first: its rule (a free plane first) would be overruled by the rollouts.
@@ -1105,14 +1110,8 @@ uint64_t Builder::run() {
       }
     }
     if (!front.empty()) {
-      task.frags = {};
-      BspNode& node = tree_.nodes[task.node];
-      node.plane = cut;
-      node.polygon = kSeparatorPolygon;
-      node.first_fragment = static_cast<uint32_t>(tree_.fragments.size());
-      node.fragment_count = 0;
       ++cuts_;
-      pushChildren(task.node, front, back, stack);
+      emptyNode(task, cut, front, back, stack);
       continue;
     }
     const uint32_t poly = frags_[splitter].poly;

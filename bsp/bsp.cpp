@@ -185,10 +185,10 @@ BspTree buildBsp(const Scene& scene, const BspOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   validate(scene);
   BspTree tree;
-  tree.stats.exact_fallbacks = detail::buildBspExact(scene, options, tree);
+  const DetailGroups detail = detailGroups(scene, options.detail_extent);
+  tree.stats.exact_fallbacks = detail::buildBspExact(scene, options, detail, tree);
   tree.scene_hash = sceneHash(scene);
   computeStats(tree, scene.polygons.size());
-  const DetailGroups detail = detailGroups(scene, options.detail_extent);
   tree.stats.detail_objects = detail.objects;
   tree.stats.detail_groups = detail.groups;
   tree.stats.detail_polygons = detail.polygons;

@@ -154,8 +154,8 @@ double rankThreshold(const std::vector<Ranked>& top, size_t k) { return top.size
 
 class Builder {
  public:
-  Builder(const Scene& scene, const BspOptions& options, BspTree& tree)
-      : scene_(scene), options_(options), tree_(tree), rng_(options.seed) {}
+  Builder(const Scene& scene, const BspOptions& options, const DetailGroups& groups, BspTree& tree)
+      : scene_(scene), options_(options), group_(groups.group), tree_(tree), rng_(options.seed) {}
 
   uint64_t run();
 
@@ -253,13 +253,23 @@ class Builder {
   // set holds structure or a single group, or when no such plane was found (counted).
   bool separate(const std::vector<uint32_t>& frags, Plane& plane, std::vector<uint32_t>& front,
                 std::vector<uint32_t>& back);
-  bool axisSeparator(Plane& plane);
+  bool axisSeparator(size_t total, Plane& plane);  // total: fragments of the set
   // For a set of detail fragments with no separating plane (or inside one group): an axis-aligned
   // plane at the median vertex coordinate, when it scores better than the best polygon plane
   // (which on a curved or hollow mesh crosses its neighbours level after level). Needs separate()
   // to have found the set detail-only.
   bool chooseCut(const std::vector<uint32_t>& frags, uint32_t best_polygon_fragment, Plane& plane);
-  double setScore(const std::vector<uint32_t>& frags, const Plane& pl, uint64_t& crossed, bool& two_sided) const;
+  // Heuristic sides (heuristicSide) of the fragments `frags` against pl, counted.
+  struct SideCounts {
+    int64_t crossed = 0, front = 0, back = 0, on = 0;
+  };
+  SideCounts countSides(std::span<const uint32_t> frags, const Plane& pl) const;
+  // The sampled greedy score of pl over `counts`: split_weight · crossed − coplanar_weight · on +
+  // |front − back|.
+  double greedyScore(const SideCounts& c) const {
+    return options_.split_weight * static_cast<double>(c.crossed) - options_.coplanar_weight * static_cast<double>(c.on) +
+           static_cast<double>(std::abs(c.front - c.back));
+  }
   bool detail_only_ = false;  // of the last set separate() looked at
   uint64_t cuts_ = 0;
   std::vector<double> coords_;  // scratch of chooseCut
@@ -268,6 +278,8 @@ class Builder {
 
   const Scene& scene_;
   const BspOptions& options_;
+  // Per input polygon, its detail group (detailGroups); empty: all structure.
+  const std::vector<uint32_t>& group_;
   BspTree& tree_;
   std::mt19937_64 rng_;
   std::vector<Vtx> verts_;
@@ -289,7 +301,6 @@ class Builder {
   uint64_t pilot_work_ = 0;  // fragments of all rollout node sets so far (bounded by pilot_work_max)
   uint64_t refined_ = 0;  // stored vertices rounded from the exact point
   double heuristic_tol_ = 0.0;
-  std::vector<uint32_t> group_;  // per input polygon, its detail group (detailGroups); empty: all structure
   bool candidates_restricted_ = false;
   // Scratch of separate(): per group its slot in group_box_ (kNoSlot when not in the set).
   struct GroupBox {
@@ -667,22 +678,7 @@ void Builder::chooseBySampling(const std::vector<uint32_t>& frags, size_t top_k,
   for (size_t c = 0; c < kc; ++c) {
     const uint32_t cand = pool_size <= kc ? (*pool)[c] : (*pool)[randomBelow(pool_size)];
     const Plane& pl = scene_.polygons[frags_[cand].poly].plane;
-    int64_t splits = 0, front = 0, back = 0, on = 0;
-    for (uint32_t fi : sample_) {
-      const int side = heuristicSide(pl, frags_[fi]);
-      if (side == 2) {
-        ++splits;
-      } else if (side == 1) {
-        ++front;
-      } else if (side == -1) {
-        ++back;
-      } else {
-        ++on;
-      }
-    }
-    const double score = options_.split_weight * static_cast<double>(splits) -
-                         options_.coplanar_weight * static_cast<double>(on) +
-                         static_cast<double>(std::abs(front - back));
+    const double score = greedyScore(countSides(sample_, pl));
     offerRanked(top, top_k, score, cand);
   }
 }
@@ -882,7 +878,7 @@ bool Builder::separate(const std::vector<uint32_t>& frags, Plane& plane, std::ve
   bool found = false;
   detail_only_ = detail_only;
   if (detail_only && group_box_.size() >= 2) {
-    found = axisSeparator(plane) || faceSeparator(frags, plane);
+    found = axisSeparator(frags.size(), plane) || faceSeparator(frags, plane);
     if (!found) ++inseparable_;
   }
   if (found) {
@@ -903,15 +899,13 @@ bool Builder::separate(const std::vector<uint32_t>& frags, Plane& plane, std::ve
 // adds no line to the PFD regions at eye height), the groups sorted by their low side, and a gap
 // wherever every group so far ends at or before the next one begins. The most balanced gap wins
 // (by fragments). The boxes enclose the exact vertices, so the sides need no further test.
-bool Builder::axisSeparator(Plane& plane) {
+bool Builder::axisSeparator(size_t total, Plane& plane) {
   const size_t g = group_box_.size();
   std::vector<uint32_t> order(g);
   double best_score = INFINITY;
   int best_axis = -1;
   double best_c = 0.0;
   size_t best_k = 0;
-  size_t total = 0;
-  for (const GroupBox& b : group_box_) total += b.fragments;
   const auto sortAlong = [&](int axis) {
     for (uint32_t i = 0; i < g; ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
@@ -953,8 +947,7 @@ bool Builder::axisSeparator(Plane& plane) {
 bool Builder::faceSeparator(const std::vector<uint32_t>& frags, Plane& plane) {
   constexpr size_t kFaceCandidates = 32;
   const size_t stride = std::max<size_t>(1, frags.size() / kFaceCandidates);
-  size_t total = 0;
-  for (const GroupBox& b : group_box_) total += b.fragments;
+  const size_t total = frags.size();
   double best_score = INFINITY;
   uint32_t best_poly = kSeparatorPolygon;
   for (size_t c = 0; c < frags.size(); c += stride) {
@@ -989,27 +982,23 @@ bool Builder::faceSeparator(const std::vector<uint32_t>& frags, Plane& plane) {
   return true;
 }
 
-double Builder::setScore(const std::vector<uint32_t>& frags, const Plane& pl, uint64_t& crossed, bool& two_sided) const {
-  int64_t front = 0, back = 0;
-  crossed = 0;
+Builder::SideCounts Builder::countSides(std::span<const uint32_t> frags, const Plane& pl) const {
+  SideCounts c;
   for (uint32_t fi : frags) {
     const int side = heuristicSide(pl, frags_[fi]);
-    crossed += side == 2;
-    front += side == 1;
-    back += side == -1;
+    c.crossed += side == 2;
+    c.front += side == 1;
+    c.back += side == -1;
+    c.on += side == 0;
   }
-  two_sided = crossed > 0 || (front > 0 && back > 0);
-  return options_.split_weight * static_cast<double>(crossed) + static_cast<double>(std::abs(front - back));
+  return c;
 }
 
 bool Builder::chooseCut(const std::vector<uint32_t>& frags, uint32_t best_polygon_fragment, Plane& plane) {
   if (!detail_only_ || frags.size() < 2) return false;
-  uint64_t crossed = 0;
-  bool two_sided = false;
-  const double polygon_score =
-      setScore(frags, scene_.polygons[frags_[best_polygon_fragment].poly].plane, crossed, two_sided);
-  if (crossed == 0) return false;  // a free polygon plane costs nothing
-  double best = polygon_score;
+  const SideCounts polygon = countSides(frags, scene_.polygons[frags_[best_polygon_fragment].poly].plane);
+  if (polygon.crossed == 0) return false;  // a free polygon plane costs nothing
+  double best = greedyScore(polygon);
   bool found = false;
   for (int axis : {1, 0, 2}) {
     coords_.clear();
@@ -1021,8 +1010,9 @@ bool Builder::chooseCut(const std::vector<uint32_t>& frags, uint32_t best_polygo
     cut.n = glm::dvec3(0.0);
     cut.n[axis] = 1.0;
     cut.d = *mid;  // a vertex coordinate: rings of vertices on it are not split
-    uint64_t c = 0;
-    const double score = setScore(frags, cut, c, two_sided);
+    const SideCounts c = countSides(frags, cut);
+    const double score = greedyScore(c);
+    const bool two_sided = c.crossed > 0 || (c.front > 0 && c.back > 0);
     if (score < best && two_sided) {
       best = score;
       plane = cut;
@@ -1051,9 +1041,10 @@ uint64_t Builder::run() {
   hv_.reserve(scene_.vertices.size() * 2);
   frags_.reserve(n * 2);
   boxes_.reserve(n * 2);
-  DetailGroups groups = detailGroups(scene_, options_.detail_extent);
-  group_ = std::move(groups.group);
-  group_slot_.assign(groups.groups, kNoSlot);
+  uint32_t groups = 0;
+  for (uint32_t g : group_)
+    if (g != kStructureGroup) groups = std::max(groups, g + 1);
+  group_slot_.assign(groups, kNoSlot);
   std::vector<uint32_t> all(n);
   for (size_t i = 0; i < n; ++i) {
     const Polygon& poly = scene_.polygons[i];
@@ -1099,14 +1090,17 @@ uint64_t Builder::run() {
     Plane cut;
     if (chooseCut(task.frags, splitter, cut)) {
       const NodePlane cut_plane{cut.n.x, cut.n.y, cut.n.z, cut.d, kSeparatorPolygon};
+      const uint64_t slivers_before = slivers_;
       partition(task.frags, cut_plane, on, front, back);
       // Fragments in the cut plane go to the side they face: either side orders them right.
       for (uint32_t fi : on) (glm::dot(scene_.polygons[frags_[fi].poly].plane.n, cut.n) > 0.0 ? front : back).push_back(fi);
       on.clear();
       if (front.empty() || back.empty()) {
-        // The exact sides put everything on one side (nothing was split): a polygon plane instead.
+        // The exact sides put everything on one side (nothing was split, and no sliver it dropped
+        // counts): a polygon plane instead.
         front.clear();
         back.clear();
+        slivers_ = slivers_before;
       }
     }
     if (!front.empty()) {
@@ -1140,8 +1134,8 @@ uint64_t Builder::run() {
 
 }  // namespace
 
-uint64_t buildBspExact(const Scene& scene, const BspOptions& options, BspTree& tree) {
-  Builder builder(scene, options, tree);
+uint64_t buildBspExact(const Scene& scene, const BspOptions& options, const DetailGroups& groups, BspTree& tree) {
+  Builder builder(scene, options, groups, tree);
   return builder.run();
 }
 

@@ -10,7 +10,8 @@ namespace walkvis::detail {
 
 // Fills tree.vertices, fragments, fragment_polygon, fragment_orientation, nodes (with depth and
 // parent) and root for a scene whose polygons buildBsp has validated. Returns the number of vertex
-// classifications the double filter left to exact arithmetic.
-uint64_t buildBspExact(const Scene& scene, const BspOptions& options, BspTree& tree);
+// classifications the double filter left to exact arithmetic. `groups` is detailGroups(scene,
+// options.detail_extent).
+uint64_t buildBspExact(const Scene& scene, const BspOptions& options, const DetailGroups& groups, BspTree& tree);
 
 }  // namespace walkvis::detail

@@ -220,8 +220,8 @@ BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& con
     n.depth = r.get<uint32_t>();
   }
   // Structure: root 0 (or none), every other node's parent comes before it and links back to it,
-  // children come after their parent; node fragment ranges are non-empty (but at separators) and disjoint and cover
-  // every fragment (checked in node order after sorting by first fragment is unnecessary: the
+  // children come after their parent; node fragment ranges are disjoint, non-empty but at
+  // separators, and cover every fragment (checked in node order after sorting by first fragment is unnecessary: the
   // writer numbers them in build order, so they are checked as a tiling in any order below).
   if (nn == 0 ? tree.root != -1 : tree.root != 0) r.fail("bad root");
   std::vector<uint8_t> covered(nf, 0);

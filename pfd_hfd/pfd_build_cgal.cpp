@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <span>
 #include <unordered_map>
 
@@ -451,8 +452,7 @@ class Builder {
     unresolved_stamp_.assign(nn, 0);
     test_plane_.assign(lines_.size(), UINT32_MAX);
     hidden_.assign(bsp.fragments.size(), 0);
-    witness_.assign(bsp.fragments.size(), glm::dvec2(0.0));
-    has_witness_.assign(bsp.fragments.size(), 0);
+    witness_.assign(bsp.fragments.size(), std::nullopt);
     // Every line is classified against the whole region once: a line that does not cross it has
     // the same side in every sub-region, for good (never logged, never undone). Only the others
     // ("varying") are ever classified again, so the work per node follows them, not N.
@@ -546,9 +546,7 @@ class Builder {
       hidden_log_.pop_back();
     }
     while (witness_log_.size() > witness_mark) {
-      const WitnessEntry& w = witness_log_.back();
-      witness_[w.fragment] = w.point;
-      has_witness_[w.fragment] = w.had;
+      witness_[witness_log_.back().fragment] = witness_log_.back().point;
       witness_log_.pop_back();
     }
   }
@@ -556,42 +554,15 @@ class Builder {
   // HFD: whether the eye that saw f from an ancestor region lies in r (a closed convex piece of
   // it, by double orientation tests): then f is visible from r with no new rays.
   bool witnessedIn(uint32_t f, const Region& r) {
-    if (!has_witness_[f]) return false;
-    const glm::dvec2 p = witness_[f];
-    for (const std::vector<glm::dvec2>& ring : rings(r)) {
-      const size_t n = ring.size();
-      if (n < 3) continue;
-      bool pos = false, neg = false;
-      for (size_t i = 0; i < n && !(pos && neg); ++i) {
-        const glm::dvec2 a = ring[i], b = ring[(i + 1) % n];
-        const double c = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-        pos = pos || c > 0.0;
-        neg = neg || c < 0.0;
-      }
-      if (!(pos && neg)) return true;
-    }
+    if (!witness_[f]) return false;
+    for (const std::vector<glm::dvec2>& ring : rings(r))
+      if (insideConvexRing(ring, *witness_[f])) return true;
     return false;
   }
 
   void setWitness(uint32_t f, const glm::dvec2& p) {
-    witness_log_.push_back({f, has_witness_[f], witness_[f]});
+    witness_log_.push_back({f, witness_[f]});
     witness_[f] = p;
-    has_witness_[f] = 1;
-  }
-
-  // HFD: of `ids`, those not hidden from an ancestor into to_test_, except those an ancestor's
-  // witness already shows visible from r, which go to `seen` (when given) or are dropped.
-  void collectTests(std::span<const uint32_t> ids, const Region& r, std::vector<uint32_t>* seen) {
-    to_test_.clear();
-    for (uint32_t f : ids) {
-      if (hidden_[f]) continue;
-      if (witnessedIn(f, r)) {
-        ++visibility_witnessed;
-        if (seen) seen->push_back(f);
-        continue;
-      }
-      to_test_.push_back(f);
-    }
   }
 
   void runTests(std::span<const uint32_t> batch, const Region& r) {
@@ -918,9 +889,18 @@ class Builder {
   // HFD: the fragments of `ids` visible from r, in order; the hidden ones are remembered for the
   // rest of this root-to-node path and never tested again below.
   void filterVisible(std::span<const uint32_t> ids, const Region& r, std::vector<uint32_t>& out) {
-    // Witnessed fragments first into `seen`, then merged back in list order.
+    // Witnessed fragments into seen_, the others tested, then both merged back in list order.
     seen_.clear();
-    collectTests(ids, r, &seen_);
+    to_test_.clear();
+    for (uint32_t f : ids) {
+      if (hidden_[f]) continue;
+      if (witnessedIn(f, r)) {
+        ++visibility_witnessed;
+        seen_.push_back(f);
+      } else {
+        to_test_.push_back(f);
+      }
+    }
     runTests(to_test_, r);
     size_t a = 0, b = 0;
     for (uint32_t f : ids) {
@@ -1487,11 +1467,9 @@ class Builder {
   // a witness in a sub-region keeps the fragment with no new rays), with an undo log.
   struct WitnessEntry {
     uint32_t fragment;
-    uint8_t had;
-    glm::dvec2 point;
+    std::optional<glm::dvec2> point;  // what it was before
   };
-  std::vector<glm::dvec2> witness_;
-  std::vector<uint8_t> has_witness_;
+  std::vector<std::optional<glm::dvec2>> witness_;
   std::vector<WitnessEntry> witness_log_;
   std::vector<glm::dvec2> witness_scratch_;
   std::vector<uint32_t> seen_;

@@ -67,6 +67,17 @@ uint32_t appendPolygon(Scene& scene, std::span<const glm::dvec3> verts, uint32_t
   return static_cast<uint32_t>(scene.polygons.size() - 1);
 }
 
+bool insideConvexRing(std::span<const glm::dvec2> ring, const glm::dvec2& p) {
+  bool pos = false, neg = false;
+  for (size_t i = 0; i < ring.size() && !(pos && neg); ++i) {
+    const glm::dvec2 a = ring[i], b = ring[(i + 1) % ring.size()];
+    const double c = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+    pos = pos || c > 0.0;
+    neg = neg || c < 0.0;
+  }
+  return ring.size() >= 3 && !(pos && neg);
+}
+
 double signedArea(std::span<const glm::dvec2> p) {
   double a = 0.0;
   for (size_t k = 1; k + 1 < p.size(); ++k) {

@@ -173,6 +173,9 @@ uint32_t appendPolygon(Scene& scene, std::span<const glm::dvec3> vertices, uint3
 // the first point, so rounding scales with the ring's size rather than with its coordinates.
 double signedArea(std::span<const glm::dvec2> ring);
 
+// Whether p lies in the closed convex ring (either winding), by double orientation tests.
+bool insideConvexRing(std::span<const glm::dvec2> ring, const glm::dvec2& p);
+
 // The scene's upward horizontal polygons (n.y >= 1 - 1e-9) grouped by height, lowest first:
 // heights within 1e-6 of the scene's size are one (files are level only up to their rounding).
 // What floor levels are made of, by either method (deriveFloorLevels, walkable.h).

@@ -1635,6 +1635,11 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.hidden_rejected = builder.hidden_rejected;
   s.visibility_witnessed = builder.visibility_witnessed;
   s.visibility_hidden_rays = builder.vis_counters.hidden_rays;
+  s.visibility_proved_hidden = builder.vis_counters.proved_hidden;
+  s.visibility_proof_rays = builder.vis_counters.proof_rays;
+  s.visibility_refine_rays = builder.vis_counters.refine_rays;
+  s.visibility_refined_visible = builder.vis_counters.refined_visible;
+  s.visibility_patch_covers = builder.vis_counters.patch_covers;
   double entropy = 0.0;
   if (s.region_area > 0.0) {
     for (double a : builder.leaf_areas) {

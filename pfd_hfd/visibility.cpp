@@ -21,11 +21,14 @@
 // Everything is deterministic in (options.seed, fragment, region, height).
 #include "pfd_hfd/visibility.h"
 
+#include "pfd_hfd/hull_distance.h"
+
 #include <embree3/rtcore.h>
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -33,6 +36,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <unordered_map>
 
 namespace walkvis {
 namespace {
@@ -64,6 +68,9 @@ constexpr uint32_t kMaxStepDepth = 6;  // steps chained from one seed ray
 // wall that hides everything), and halvings of a region or target part.
 constexpr uint32_t kProofHits = 3;
 constexpr uint32_t kMaxProofDepth = 6;
+// Occluder patches: at most this many input polygons joined across shared edges for one sub-cone
+// (a corridor's walls, floor and ceiling are a few dozen; beyond that the proof gives up).
+constexpr uint32_t kMaxPatch = 48;
 
 uint64_t splitmix(uint64_t& state) {
   uint64_t z = (state += 0x9E3779B97F4A7C15ull);
@@ -231,6 +238,84 @@ void planeBasis(const glm::dvec3& n, glm::dvec3& u, glm::dvec3& w) {
   w = glm::cross(n, u);
 }
 
+// Per outline edge, the edges of other outlines on the same line that overlap it (either
+// direction): CSR, partners[first[e], first[e + 1]). "On the line" within `tol`: a T-junction's
+// vertices are rounded, and a crack that narrow is below Embree's single precision too.
+struct EdgePartners {
+  std::vector<uint32_t> first;     // per edge, plus one
+  std::vector<uint32_t> partners;  // edge indices
+  std::vector<uint32_t> owner;     // per edge, its outline
+};
+
+EdgePartners collinearPartners(const std::vector<uint32_t>& outline_first, const std::vector<glm::dvec3>& verts,
+                               double cell, double tol) {
+  EdgePartners ep;
+  const uint32_t outlines = static_cast<uint32_t>(outline_first.size()) - 1;
+  const size_t edges = verts.size();
+  ep.owner.assign(edges, 0);
+  for (uint32_t o = 0; o < outlines; ++o)
+    for (uint32_t e = outline_first[o]; e < outline_first[o + 1]; ++e) ep.owner[e] = o;
+  auto next = [&](uint32_t e) { return e + 1 == outline_first[ep.owner[e] + 1] ? outline_first[ep.owner[e]] : e + 1; };
+  auto cellKey = [&](int64_t x, int64_t y, int64_t z) {
+    return mixHash(mixHash(mixHash(0, static_cast<uint64_t>(x)), static_cast<uint64_t>(y)), static_cast<uint64_t>(z));
+  };
+  auto cellOf = [&](const glm::dvec3& p) { return glm::floor(p / cell); };
+  // Each edge is entered in the cells of points at most half a cell apart along it; a partner
+  // overlapping it by any length then has a point in one of the 27 cells around one of them.
+  auto samples = [&](uint32_t e) {
+    const double len = glm::length(verts[next(e)] - verts[e]);
+    return static_cast<uint32_t>(std::min(1e6, std::ceil(2.0 * len / cell))) + 1;
+  };
+  std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
+  for (uint32_t e = 0; e < edges; ++e) {
+    if (outline_first[ep.owner[e] + 1] - outline_first[ep.owner[e]] < 3) continue;
+    const glm::dvec3 a = verts[e], b = verts[next(e)];
+    const uint32_t n = samples(e);
+    uint64_t last = 0;
+    for (uint32_t k = 0; k <= n; ++k) {
+      const glm::dvec3 c = cellOf(a + (b - a) * (static_cast<double>(k) / n));
+      const uint64_t key = cellKey(static_cast<int64_t>(c.x), static_cast<int64_t>(c.y), static_cast<int64_t>(c.z));
+      if (k > 0 && key == last) continue;
+      last = key;
+      auto& list = grid[key];
+      if (list.empty() || list.back() != e) list.push_back(e);
+    }
+  }
+  ep.first.assign(edges + 1, 0);
+  std::vector<uint32_t> found;
+  for (uint32_t e = 0; e < edges; ++e) {
+    ep.first[e] = static_cast<uint32_t>(ep.partners.size());
+    if (outline_first[ep.owner[e] + 1] - outline_first[ep.owner[e]] < 3) continue;
+    const glm::dvec3 a = verts[e], b = verts[next(e)];
+    const double len = glm::length(b - a);
+    if (!(len > tol)) continue;
+    const glm::dvec3 u = (b - a) / len;
+    found.clear();
+    const uint32_t n = samples(e);
+    for (uint32_t k = 0; k <= n; ++k) {
+      const glm::dvec3 c = cellOf(a + (b - a) * (static_cast<double>(k) / n));
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it = grid.find(cellKey(static_cast<int64_t>(c.x) + dx, static_cast<int64_t>(c.y) + dy,
+                                              static_cast<int64_t>(c.z) + dz));
+            if (it != grid.end()) found.insert(found.end(), it->second.begin(), it->second.end());
+          }
+    }
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    for (uint32_t f : found) {
+      if (ep.owner[f] == ep.owner[e]) continue;
+      const glm::dvec3 c = verts[f], d = verts[next(f)];
+      const double tc = glm::dot(c - a, u), td = glm::dot(d - a, u);
+      if (glm::length(c - a - tc * u) > tol || glm::length(d - a - td * u) > tol) continue;
+      if (std::min(std::max(tc, td), len) - std::max(std::min(tc, td), 0.0) > tol) ep.partners.push_back(f);
+    }
+  }
+  ep.first[edges] = static_cast<uint32_t>(ep.partners.size());
+  return ep;
+}
+
 struct Hit {
   uint32_t fragment = 0;
   double t = 0.0;  // along the unnormalised direction (target - eye)
@@ -277,6 +362,13 @@ struct Scratch {
   std::vector<glm::dvec2> pool;  // proof: region and target parts, each a run of vertices
   std::vector<glm::dvec2> poly, poly2;
   std::vector<ProofItem> items;
+  // Occluder patch: its outlines, their edges still to look at, and a stamp per outline of the
+  // scene (stamp == patch_stamp: in the patch).
+  std::vector<uint32_t> patch, patch_edges, outline_stamp;
+  uint32_t patch_stamp = 0;
+  std::vector<glm::dvec3> hull3;  // the segments' hull: region part and target part, in 3D
+  std::vector<glm::dvec3> region3, target3;
+  std::vector<double> breaks;
 };
 
 Scratch& scratch() {
@@ -305,6 +397,11 @@ struct VisibilityScene::Impl {
   // and their planes, for the single-occluder proof.
   std::vector<glm::dvec2> outline_2d;
   std::vector<Plane> outline_plane;
+  // Per outline edge (index outline_first[o] + k, from vertex k to k + 1), the edges of other
+  // outlines along the same line that overlap it: where they run the other way the two outlines
+  // are consistently oriented neighbours there (a wall and the next, or the three walls beside
+  // one tall one at a T-junction).
+  EdgePartners edge_partners;
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -345,6 +442,147 @@ struct VisibilityScene::Impl {
     hit->fragment = triangle_fragment[rh.hit.primID];
     hit->t = rh.ray.tfar;
     return true;
+  }
+
+  // True when every segment from conv(region3) to conv(target3) meets the front side of an
+  // outline of one patch grown from `seed`: outlines joined across shared, oppositely oriented
+  // edges (Impl::edge_partners), so that the patch is an oriented surface whose boundary is where
+  // its outlines' edges do not cancel in pairs. A segment's signed count of crossings with it
+  // (+1 entering a front side, -1 a back side) stays the same while the segment moves, as long as
+  // no segment meets the boundary and no end point touches the patch. The segments from R to T
+  // fill conv(R ∪ T) and move continuously, so when that hull keeps clear of the boundary and R
+  // and T keep clear of the patch, one segment's count is every segment's. A count of at
+  // least 1 means a front side is entered: blocked, as the Embree rays are. A corridor's walls
+  // hide what lies beyond its bend together though no one of them does (occluder fusion). The
+  // patch grows only across boundary edges that come within `margin` of the hull, and gives up at
+  // an opening, at the target's own outline, or beyond kMaxPatch outlines.
+  bool patchCovers(uint32_t seed, uint32_t target_outline, std::span<const glm::dvec3> region3,
+                   std::span<const glm::dvec3> target3, double margin, double end_gap, double min_crack,
+                   Scratch& sc) const {
+    const size_t outlines = outline_first.size() - 1;
+    if (sc.outline_stamp.size() < outlines) sc.outline_stamp.assign(outlines, 0), sc.patch_stamp = 0;
+    if (++sc.patch_stamp == 0) {
+      std::fill(sc.outline_stamp.begin(), sc.outline_stamp.end(), 0u);
+      sc.patch_stamp = 1;
+    }
+    const uint32_t stamp = sc.patch_stamp;
+    sc.hull3.assign(region3.begin(), region3.end());
+    sc.hull3.insert(sc.hull3.end(), target3.begin(), target3.end());
+    sc.patch.clear();
+    sc.patch_edges.clear();
+    auto add = [&](uint32_t o) {
+      sc.outline_stamp[o] = stamp;
+      sc.patch.push_back(o);
+      for (uint32_t e = outline_first[o]; e < outline_first[o + 1]; ++e) sc.patch_edges.insert(sc.patch_edges.end(), {o, e});
+    };
+    if (seed == target_outline || outline_first[seed + 1] - outline_first[seed] < 3) return false;
+    add(seed);
+    const EdgePartners& ep = edge_partners;
+    while (!sc.patch_edges.empty()) {
+      const uint32_t e = sc.patch_edges.back();
+      sc.patch_edges.pop_back();
+      const uint32_t o = sc.patch_edges.back();
+      sc.patch_edges.pop_back();
+      const uint32_t next = e + 1 == outline_first[o + 1] ? outline_first[o] : e + 1;
+      const glm::dvec3 a = outline_vertices[e], b = outline_vertices[next];
+      const double len = glm::length(b - a);
+      if (!(len > 0.0)) continue;
+      const glm::dvec3 u = (b - a) / len;
+      // The patch's boundary along this edge: where the edge and the partners in the patch do not
+      // cancel (one running each way). Breakpoints at the partners' ends; each stretch between
+      // two has one multiplicity.
+      sc.breaks.clear();
+      sc.breaks.push_back(0.0);
+      sc.breaks.push_back(len);
+      for (uint32_t i = ep.first[e]; i < ep.first[e + 1]; ++i) {
+        const uint32_t f = ep.partners[i];
+        if (sc.outline_stamp[ep.owner[f]] != stamp) continue;
+        const uint32_t fn = f + 1 == outline_first[ep.owner[f] + 1] ? outline_first[ep.owner[f]] : f + 1;
+        for (uint32_t v : {f, fn}) sc.breaks.push_back(std::clamp(glm::dot(outline_vertices[v] - a, u), 0.0, len));
+      }
+      std::sort(sc.breaks.begin(), sc.breaks.end());
+      bool open = false;  // some boundary stretch comes near the hull
+      for (size_t k = 0; k + 1 < sc.breaks.size() && !open; ++k) {
+        const double t0 = sc.breaks[k], t1 = sc.breaks[k + 1];
+        if (!(t1 - t0 > min_crack)) continue;  // a crack below the partners' tolerance
+        const double mid = 0.5 * (t0 + t1);
+        int net = 1;
+        for (uint32_t i = ep.first[e]; i < ep.first[e + 1]; ++i) {
+          const uint32_t f = ep.partners[i];
+          if (sc.outline_stamp[ep.owner[f]] != stamp) continue;
+          const uint32_t fn = f + 1 == outline_first[ep.owner[f] + 1] ? outline_first[ep.owner[f]] : f + 1;
+          const double tf0 = glm::dot(outline_vertices[f] - a, u), tf1 = glm::dot(outline_vertices[fn] - a, u);
+          if (std::min(tf0, tf1) <= mid && mid <= std::max(tf0, tf1)) net += tf1 < tf0 ? -1 : 1;
+        }
+        if (net == 0) continue;
+        const glm::dvec3 piece[2] = {a + t0 * u, a + t1 * u};
+        open = !hullsSeparated(piece, sc.hull3, margin);
+      }
+      if (!open) continue;  // every boundary stretch here is clear of every segment
+      // Join the outlines across it: each partner running the other way, not yet in the patch.
+      bool grown = false;
+      for (uint32_t i = ep.first[e]; i < ep.first[e + 1]; ++i) {
+        const uint32_t f = ep.partners[i], q = ep.owner[f];
+        if (sc.outline_stamp[q] == stamp) continue;
+        const uint32_t fn = f + 1 == outline_first[q + 1] ? outline_first[q] : f + 1;
+        if (!(glm::dot(outline_vertices[fn] - outline_vertices[f], u) < 0.0)) continue;
+        if (q == target_outline || sc.patch.size() >= kMaxPatch) return false;
+        add(q);
+        grown = true;
+      }
+      if (!grown) return false;  // an opening (or a same-way overlap) next to the segments
+      sc.patch_edges.insert(sc.patch_edges.end(), {o, e});  // look again with the new partners
+    }
+    // The ends: eyes off the patch by the margin, target points by the end gap (the rays stop that
+    // far short of the target's plane; a crossing nearer would not be cast).
+    for (uint32_t o : sc.patch) {
+      const std::span<const glm::dvec3> ov(outline_vertices.data() + outline_first[o], outline_first[o + 1] - outline_first[o]);
+      if (!hullsSeparated(ov, region3, margin) || !hullsSeparated(ov, target3, end_gap)) return false;
+    }
+    // One segment's count: centroid to centroid, or when that one passes too near an edge of the
+    // patch to count in double precision (a symmetric scene puts it on a shared edge), a segment
+    // between points pulled towards vertices of the two parts.
+    glm::dvec3 ce{0.0}, cp{0.0};
+    for (const auto& r : region3) ce += r;
+    for (const auto& t : target3) cp += t;
+    ce /= static_cast<double>(region3.size());
+    cp /= static_cast<double>(target3.size());
+    for (uint32_t attempt = 0; attempt < 4; ++attempt) {
+      const glm::dvec3 e = attempt == 0 ? ce : ce + 0.37 * (region3[attempt % region3.size()] - ce);
+      const glm::dvec3 p = attempt == 0 ? cp : cp + 0.29 * (target3[(attempt * 2 + 1) % target3.size()] - cp);
+      const std::optional<int> count = signedCrossings(e, p, margin, sc.patch);
+      if (count) return *count >= 1;
+    }
+    return false;
+  }
+
+  // The signed count of the crossings of segment e-p with the outlines `patch` (+1 entering a
+  // front side), or nullopt when it passes within `margin` of an outline's edge.
+  std::optional<int> signedCrossings(const glm::dvec3& e, const glm::dvec3& p, double margin,
+                                     std::span<const uint32_t> patch) const {
+    int count = 0;
+    for (uint32_t o : patch) {
+      const Plane& op = outline_plane[o];
+      const double de = glm::dot(op.n, e) - op.d, dp = glm::dot(op.n, p) - op.d;
+      // An end on the plane lies off the outline (the hull tests above): no crossing there.
+      if (!((de > 0.0 && dp < 0.0) || (de < 0.0 && dp > 0.0))) continue;
+      glm::dvec3 ou, ow;
+      planeBasis(op.n, ou, ow);
+      const glm::dvec3 x = e + (de / (de - dp)) * (p - e) - op.n * op.d;
+      const glm::dvec2 q{glm::dot(x, ou), glm::dot(x, ow)};
+      const uint32_t of = outline_first[o], oc = outline_first[o + 1] - of;
+      bool outside = false, near = false;
+      for (uint32_t k = 0; k < oc && !outside; ++k) {
+        const glm::dvec2 a = outline_2d[of + k], ab = outline_2d[of + (k + 1) % oc] - a;
+        const double c = cross2(ab, q - a), len = glm::length(ab);
+        outside = c < -margin * len;
+        near = near || !(c > margin * len);
+      }
+      if (outside) continue;
+      if (near) return std::nullopt;
+      count += de > 0.0 ? 1 : -1;
+    }
+    return count;
   }
 
   // Occlusion of up to kPacket segments at once (one Embree packet: the rays of one test run from
@@ -437,6 +675,7 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
 
   // Outlines: the convex hull of each input polygon's fragments, in that polygon's plane.
   const size_t nf = s.fragments.size();
+  std::vector<glm::dvec3> exact;  // per outline vertex, the scene vertex it stands for
   s.fragment_outline.assign(nf, 0);
   {
     std::vector<uint32_t> order(nf);
@@ -444,6 +683,7 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
     auto key = [&](uint32_t f) { return f < bsp.fragment_polygon.size() ? bsp.fragment_polygon[f] : f; };
     std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
     std::vector<glm::dvec2> pts;
+    std::vector<glm::dvec3> pts3;
     s.outline_first.push_back(0);
     for (size_t i = 0; i < nf;) {
       size_t j = i;
@@ -453,11 +693,20 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
       planeBasis(pl.n, u, w);
       const glm::dvec3 base = pl.n * pl.d;
       pts.clear();
+      pts3.clear();
       for (size_t k = i; k < j; ++k)
-        for (const auto& v : bsp.fragmentVertices(order[k])) pts.push_back({glm::dot(v - base, u), glm::dot(v - base, w)});
+        for (const auto& v : bsp.fragmentVertices(order[k])) {
+          pts.push_back({glm::dot(v - base, u), glm::dot(v - base, w)});
+          pts3.push_back(v);
+        }
       const std::vector<glm::dvec2> hull = convexHull(pts);
       const uint32_t o = static_cast<uint32_t>(s.outline_first.size() - 1);
-      for (const auto& h : hull) s.outline_vertices.push_back(base + h.x * u + h.y * w);
+      for (const auto& h : hull) {
+        s.outline_vertices.push_back(base + h.x * u + h.y * w);
+        // The scene vertex the hull point was projected from (the hull keeps input points).
+        const size_t src = static_cast<size_t>(std::find(pts.begin(), pts.end(), h) - pts.begin());
+        exact.push_back(src < pts3.size() ? pts3[src] : s.outline_vertices.back());
+      }
       s.outline_2d.insert(s.outline_2d.end(), hull.begin(), hull.end());
       s.outline_plane.push_back(pl);
       s.outline_first.push_back(static_cast<uint32_t>(s.outline_vertices.size()));
@@ -465,6 +714,9 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
       i = j;
     }
   }
+
+  // Cells of 1/256 of the extent: a few per wall on a building, tens of edges per cell at most.
+  s.edge_partners = collinearPartners(s.outline_first, exact, s.extent / 256.0, kMinGap * s.extent);
 
   s.device = rtcNewDevice(nullptr);
   if (!s.device) throw SceneError("visibility: Embree rtcNewDevice failed");
@@ -748,6 +1000,14 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
         if (o == last_outline) continue;
         last_outline = o;
         covered = covers(o, rp, tq);
+        if (!covered && opt.fuse_occluders) {
+          sc.region3.clear();
+          sc.target3.clear();
+          for (const auto& rv : rp) sc.region3.push_back(eyeAt(rv));
+          for (const auto& t : tq) sc.target3.push_back(target3(t));
+          covered = s.patchCovers(o, s.fragment_outline[fragment], sc.region3, sc.target3, min_gap, end_gap, min_gap, sc);
+          if (covered) ++counters.patch_covers;
+        }
       }
       if (covered) continue;
       if (it.depth >= kMaxProofDepth || budget == 0) return 0;
@@ -885,13 +1145,18 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     return true;
   }
   if (opt.proof_rays > 0) {
+    const uint64_t rays_before = counters.rays;
     const int proof = proveHidden();
+    counters.proof_rays += counters.rays - rays_before;
     if (proof == 2) {
       ++counters.visible;
       if (witness) *witness = {clear_eye.x, clear_eye.z};
       return true;
     }
-    if (proof == 1) return false;
+    if (proof == 1) {
+      ++counters.proved_hidden;
+      return false;
+    }
   }
   if (uniformPackets(std::numeric_limits<uint64_t>::max())) {
     ++counters.visible;
@@ -981,8 +1246,10 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     const int r = castClear(eye, target, &hit);
     if (r < 0) continue;
     --budget;
+    ++counters.refine_rays;
     if (r == 1) {
       ++counters.visible;
+      ++counters.refined_visible;
       if (witness) *witness = {eye.x, eye.z};
       return true;
     }

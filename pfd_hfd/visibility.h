@@ -45,6 +45,9 @@ struct VisibilityOptions {
   // A quarter of the region samples stand in front of the fragment (the region's nearest points
   // to points out along its normal) instead of inside by area. Not stored in tree files.
   bool near_samples = true;
+  // The proof may join blockers across shared edges into one occluding patch (occluder fusion:
+  // a corridor's walls hide what lies past its bend together). Not stored in tree files.
+  bool fuse_occluders = true;
 };
 
 struct VisibilityCounters {
@@ -52,11 +55,21 @@ struct VisibilityCounters {
   uint64_t rays = 0;     // occlusion rays cast
   uint64_t visible = 0;  // queries answered "visible"
   uint64_t hidden_rays = 0;  // rays of the queries answered "hidden" (counted by visibleBatch)
+  uint64_t proved_hidden = 0;  // queries answered "hidden" by the single-occluder proof
+  uint64_t proof_rays = 0;     // rays cast by that proof (answered or not)
+  uint64_t refine_rays = 0;    // rays cast by the refinement past blockers' edges
+  uint64_t refined_visible = 0;  // queries answered "visible" by the refinement (uniform rays missed them)
+  uint64_t patch_covers = 0;   // proof sub-cones covered by a patch of joined outlines, not by one
   void add(const VisibilityCounters& o) {
     tests += o.tests;
     rays += o.rays;
     visible += o.visible;
     hidden_rays += o.hidden_rays;
+    proved_hidden += o.proved_hidden;
+    proof_rays += o.proof_rays;
+    refine_rays += o.refine_rays;
+    refined_visible += o.refined_visible;
+    patch_covers += o.patch_covers;
   }
 };
 

@@ -269,10 +269,47 @@ TEST(Visibility, ProofRejectsAClosedWallWithFewRays) {
   EXPECT_GT(co.rays, 100u);
 }
 
+// Room A = [0, 10] x [0, 10] and room B beyond x = 10 as in twoRooms, but the wall x = 10 is
+// `panels` strips side by side, sharing their vertical edges; `hole` (when >= 0) is a strip
+// with a window of 0.6 x 0.6 in it (four pieces around the opening). With `stacked`, every
+// other strip is two halves one above the other, so the tall strips beside them meet them at
+// T-junctions.
+Scene stripWall(int panels, int hole, bool stacked, uint32_t* back_wall) {
+  Scene s;
+  const double top = 3.0;
+  addQuad(s, {0, 0, 0}, {20, 0, 0}, {20, 0, 10}, {0, 0, 10}, {0, 1, 0});
+  addQuad(s, {0, top, 0}, {20, top, 0}, {20, top, 10}, {0, top, 10}, {0, -1, 0});
+  addQuad(s, {0, 0, 0}, {0, 0, 10}, {0, top, 10}, {0, top, 0}, {1, 0, 0});
+  *back_wall = addQuad(s, {20, 0, 0}, {20, 0, 10}, {20, top, 10}, {20, top, 0}, {-1, 0, 0});
+  addQuad(s, {0, 0, 0}, {20, 0, 0}, {20, top, 0}, {0, top, 0}, {0, 0, 1});
+  addQuad(s, {0, 0, 10}, {20, 0, 10}, {20, top, 10}, {0, top, 10}, {0, 0, -1});
+  const double w = 10.0 / panels;
+  auto strip = [&](double z0, double z1, double y0, double y1) {
+    addQuad(s, {10, y0, z0}, {10, y0, z1}, {10, y1, z1}, {10, y1, z0}, {-1, 0, 0});
+  };
+  for (int k = 0; k < panels; ++k) {
+    const double z0 = k * w, z1 = (k + 1) * w;
+    if (k == hole) {
+      const double zm = 0.5 * (z0 + z1);
+      strip(z0, z1, 0, 1.2);
+      strip(z0, z1, 1.8, top);
+      strip(z0, zm - 0.3, 1.2, 1.8);
+      strip(zm + 0.3, z1, 1.2, 1.8);
+    } else if (stacked && k % 2 == 1) {
+      strip(z0, z1, 0, 1.4);
+      strip(z0, z1, 1.4, top);
+    } else {
+      strip(z0, z1, 0, top);
+    }
+  }
+  return s;
+}
+
 // The proof is exact: wherever it answers "hidden", sampling without it finds no unblocked ray
-// either (over rooms with doors and random regions; seeds fixed).
+// either (over rooms with doors and random regions; seeds fixed; fused patches included).
 TEST(Visibility, ProofNeverHidesWhatSamplingSees) {
   int proved = 0, hidden = 0, compared = 0;
+  uint64_t patch_covers = 0;
   for (uint64_t seed = 1; seed <= 4; ++seed) {
     const Scene scene = roomGrid(seed, 3);
     const BspTree bsp = buildBsp(scene);
@@ -290,6 +327,7 @@ TEST(Visibility, ProofNeverHidesWhatSamplingSees) {
       ++compared;
       if (!va) ++hidden;
       if (!va && ca.rays < cb.rays) ++proved;
+      patch_covers += ca.patch_covers;
       // (The proof's centre rays may find a real opening sampling misses: visible only with it is fine.)
       EXPECT_FALSE(!va && vb) << "seed " << seed << " fragment " << f << " region [" << x0 << "," << x1 << "]x[" << z0
                               << "," << z1 << "]";
@@ -298,6 +336,71 @@ TEST(Visibility, ProofNeverHidesWhatSamplingSees) {
   EXPECT_GT(compared, 500);
   EXPECT_GT(hidden, 50);
   EXPECT_GT(proved, 10);  // the proof was exercised
+  // The same over the strip walls (fused patches, T-junctions, a window), boxes inside room A and
+  // every fragment.
+  int fused_hidden = 0;
+  for (int variant = 0; variant < 4; ++variant) {
+    uint32_t back = 0;
+    const Scene scene = stripWall(variant < 2 ? 20 : 7, variant % 2 == 0 ? -1 : 3, variant >= 2, &back);
+    const BspTree bsp = buildBsp(scene);
+    VisibilityOptions off;
+    off.proof_rays = 0;
+    const VisibilityScene a = VisibilityScene::build(bsp);
+    const VisibilityScene b = VisibilityScene::build(bsp, off);
+    std::mt19937_64 rng(variant + 100);
+    std::uniform_real_distribution<double> u(0.0, 10.0);
+    for (int trial = 0; trial < 12; ++trial) {
+      double x0 = u(rng), x1 = u(rng), z0 = u(rng), z1 = u(rng);
+      if (x0 > x1) std::swap(x0, x1);
+      if (z0 > z1) std::swap(z0, z1);
+      if (x1 - x0 < 0.5 || z1 - z0 < 0.5) continue;
+      const Region region{{{x0, z0}, {x1, z0}, {x1, z1}, {x0, z1}}};
+      for (uint32_t f = 0; f < bsp.fragments.size(); ++f) {
+        VisibilityCounters ca, cb;
+        const bool va = a.visibleFromRegion(f, region, 1.5, ca);
+        const bool vb = b.visibleFromRegion(f, region, 1.5, cb);
+        patch_covers += ca.patch_covers;
+        if (!va && ca.patch_covers > 0) ++fused_hidden;
+        EXPECT_FALSE(!va && vb) << "strip variant " << variant << " fragment " << f << " region [" << x0 << ","
+                                << x1 << "]x[" << z0 << "," << z1 << "]";
+      }
+    }
+  }
+  EXPECT_GT(patch_covers, 10u);  // fused occluders were exercised
+  EXPECT_GT(fused_hidden, 10);
+}
+
+// Occluder fusion: room B's far wall is hidden from room A by the wall x = 10 as a whole, though
+// no one strip of it covers more than a sliver of the view. The proof joins the strips (across
+// shared edges and across T-junctions) and rejects it with a packet and a ray or two; without
+// fusion it takes the full sampling. With a window in one strip it stays visible.
+TEST(Visibility, FusedStripsHideWhatNoOneStripHides) {
+  for (const bool stacked : {false, true}) {
+    SCOPED_TRACE(stacked ? "stacked strips" : "full-height strips");
+    uint32_t back = 0;
+    const Scene closed = stripWall(20, -1, stacked, &back);
+    const BspTree bsp = buildBsp(closed);
+    VisibilityOptions off;
+    off.fuse_occluders = false;
+    const VisibilityScene with = VisibilityScene::build(bsp);
+    const VisibilityScene without = VisibilityScene::build(bsp, off);
+    const uint32_t f = fragmentOf(bsp, back);
+    VisibilityCounters cw, co;
+    EXPECT_FALSE(with.visibleFromRegion(f, kRoomA, 1.5, cw));
+    EXPECT_FALSE(without.visibleFromRegion(f, kRoomA, 1.5, co));
+    EXPECT_EQ(cw.proved_hidden, 1u);
+    EXPECT_GE(cw.patch_covers, 1u);
+    EXPECT_LE(cw.rays, 16u + 3u);
+    EXPECT_EQ(co.proved_hidden, 0u);
+    EXPECT_GT(co.rays, 100u);
+
+    const Scene open = stripWall(20, 7, stacked, &back);
+    const BspTree bsp_open = buildBsp(open);
+    const VisibilityScene vis_open = VisibilityScene::build(bsp_open);
+    VisibilityCounters c;
+    EXPECT_TRUE(vis_open.visibleFromRegion(fragmentOf(bsp_open, back), kRoomA, 1.5, c));
+    EXPECT_EQ(c.proved_hidden, 0u);
+  }
 }
 
 TEST(Visibility, Deterministic) {

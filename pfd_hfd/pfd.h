@@ -180,6 +180,7 @@ struct PfdStats {
   uint64_t visibility_refine_rays = 0;
   uint64_t visibility_refined_visible = 0;
   uint64_t visibility_patch_covers = 0;
+  uint64_t visibility_kept_unproven = 0;  // conservative mode: tests kept for want of a proof
   uint64_t bytes = 0;             // the tree's arrays
   double build_seconds = 0.0;
 };

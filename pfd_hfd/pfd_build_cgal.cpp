@@ -570,7 +570,7 @@ class Builder {
     witness_scratch_.assign(batch.size(), glm::dvec2(0.0));
     visibleBatch(*options_.visibility, batch, rings(r), height_, results_, witness_scratch_, vis_counters);
     for (size_t i = 0; i < batch.size(); ++i)
-      if (results_[i]) setWitness(batch[i], witness_scratch_[i]);
+      if (results_[i] && std::isfinite(witness_scratch_[i].x)) setWitness(batch[i], witness_scratch_[i]);
   }
 
   // The crossing line (if any) among the orientation-0 fragments of a node; UINT32_MAX if none.
@@ -1640,6 +1640,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.visibility_refine_rays = builder.vis_counters.refine_rays;
   s.visibility_refined_visible = builder.vis_counters.refined_visible;
   s.visibility_patch_covers = builder.vis_counters.patch_covers;
+  s.visibility_kept_unproven = builder.vis_counters.kept_unproven;
   double entropy = 0.0;
   if (s.region_area > 0.0) {
     for (double a : builder.leaf_areas) {

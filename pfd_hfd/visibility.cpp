@@ -948,7 +948,7 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
       sc.items.push_back({first, static_cast<uint32_t>(sc.clip.size()), t_first, t_count, 0});
     }
-    uint32_t budget = opt.proof_rays;
+    uint32_t budget = opt.conservative ? std::max(opt.proof_rays, opt.conservative_proof_rays) : opt.proof_rays;
     auto centroidOf = [&](uint32_t first, uint32_t count) {
       glm::dvec2 c{0.0};
       for (uint32_t k = 0; k < count; ++k) c += sc.pool[first + k];
@@ -1144,7 +1144,7 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     if (witness) *witness = {clear_eye.x, clear_eye.z};
     return true;
   }
-  if (opt.proof_rays > 0) {
+  if (opt.proof_rays > 0 || opt.conservative) {
     const uint64_t rays_before = counters.rays;
     const int proof = proveHidden();
     counters.proof_rays += counters.rays - rays_before;
@@ -1157,6 +1157,13 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       ++counters.proved_hidden;
       return false;
     }
+  }
+  if (opt.conservative) {
+    // Not proved hidden: kept, whatever further sampling would say.
+    ++counters.visible;
+    ++counters.kept_unproven;
+    if (witness) *witness = glm::dvec2(std::numeric_limits<double>::quiet_NaN());
+    return true;
   }
   if (uniformPackets(std::numeric_limits<uint64_t>::max())) {
     ++counters.visible;

@@ -48,6 +48,12 @@ struct VisibilityOptions {
   // The proof may join blockers across shared edges into one occluding patch (occluder fusion:
   // a corridor's walls hide what lies past its bend together). Not stored in tree files.
   bool fuse_occluders = true;
+  // Conservative: a fragment is rejected only when the proof shows it hidden from the whole
+  // region (but for the band of eyes within half the region inset of its edges); a test the
+  // proof cannot settle, within conservative_proof_rays, keeps the fragment (no witness then).
+  // Not stored in tree files.
+  bool conservative = false;
+  uint32_t conservative_proof_rays = 256;
 };
 
 struct VisibilityCounters {
@@ -60,6 +66,7 @@ struct VisibilityCounters {
   uint64_t refine_rays = 0;    // rays cast by the refinement past blockers' edges
   uint64_t refined_visible = 0;  // queries answered "visible" by the refinement (uniform rays missed them)
   uint64_t patch_covers = 0;   // proof sub-cones covered by a patch of joined outlines, not by one
+  uint64_t kept_unproven = 0;  // conservative: queries answered "visible" because nothing was proved
   void add(const VisibilityCounters& o) {
     tests += o.tests;
     rays += o.rays;
@@ -70,6 +77,7 @@ struct VisibilityCounters {
     refine_rays += o.refine_rays;
     refined_visible += o.refined_visible;
     patch_covers += o.patch_covers;
+    kept_unproven += o.kept_unproven;
   }
 };
 
@@ -86,7 +94,8 @@ class VisibilityScene {
   // orientation; zero-area pieces ignored; must not be empty) to fragment `fragment` of the BSP
   // is unblocked. False means hidden from every sample (the one approximation of the HFD tree).
   // When visible and `witness` is given, *witness is the (x, z) of that ray's eye: a point of the
-  // region from which the fragment is seen, so every sub-region holding it sees it too.
+  // region from which the fragment is seen, so every sub-region holding it sees it too; NaN when
+  // the conservative mode keeps a fragment no ray was seen to reach.
   bool visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region, double height,
                          VisibilityCounters& counters, glm::dvec2* witness = nullptr) const;
 

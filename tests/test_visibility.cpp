@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <random>
+#include <cmath>
 
 #include <glm/geometric.hpp>
 
@@ -401,6 +402,62 @@ TEST(Visibility, FusedStripsHideWhatNoOneStripHides) {
     EXPECT_TRUE(vis_open.visibleFromRegion(fragmentOf(bsp_open, back), kRoomA, 1.5, c));
     EXPECT_EQ(c.proved_hidden, 0u);
   }
+}
+
+// Conservative mode: the closed strip wall is proved to hide the far wall; with a window it is
+// kept; over random regions of room grids it rejects nothing that sampling sees, and what the
+// proof cannot decide is kept without a witness.
+TEST(Visibility, ConservativeRejectsOnlyWhatIsProved) {
+  VisibilityOptions conservative;
+  conservative.conservative = true;
+  for (const bool stacked : {false, true}) {
+    uint32_t back = 0;
+    const Scene closed = stripWall(20, -1, stacked, &back);
+    const BspTree bsp = buildBsp(closed);
+    const VisibilityScene vis = VisibilityScene::build(bsp, conservative);
+    VisibilityCounters c;
+    EXPECT_FALSE(vis.visibleFromRegion(fragmentOf(bsp, back), kRoomA, 1.5, c));
+    EXPECT_EQ(c.proved_hidden, 1u);
+    const Scene open = stripWall(20, 7, stacked, &back);
+    const BspTree bsp_open = buildBsp(open);
+    const VisibilityScene vis_open = VisibilityScene::build(bsp_open, conservative);
+    VisibilityCounters co;
+    glm::dvec2 witness{0.0};
+    EXPECT_TRUE(vis_open.visibleFromRegion(fragmentOf(bsp_open, back), kRoomA, 1.5, co, &witness));
+  }
+  // Over random regions of room grids: whatever the conservative mode rejects, sampling without
+  // the proof rejects too, and a kept fragment's witness is a point of the region or NaN.
+  int kept_unproven = 0, rejected = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const Scene scene = roomGrid(seed, 3);
+    const BspTree bsp = buildBsp(scene);
+    VisibilityOptions off;
+    off.proof_rays = 0;
+    off.seed = seed;
+    VisibilityOptions cons = conservative;
+    cons.seed = seed;
+    const VisibilityScene a = VisibilityScene::build(bsp, cons);
+    const VisibilityScene b = VisibilityScene::build(bsp, off);
+    std::mt19937_64 rng(seed * 77);
+    forRandomBoxFragments(rng, 20, 10, bsp.fragments.size(), [&](const Box& box, uint32_t f) {
+      VisibilityCounters ca, cb;
+      glm::dvec2 w{0.0};
+      const bool va = a.visibleFromRegion(f, box.region, 1.5, ca, &w);
+      const bool vb = b.visibleFromRegion(f, box.region, 1.5, cb);
+      EXPECT_FALSE(!va && vb) << "seed " << seed << " fragment " << f;
+      if (!va) ++rejected;
+      if (ca.kept_unproven > 0) {
+        ++kept_unproven;
+        EXPECT_TRUE(va);
+        EXPECT_TRUE(std::isnan(w.x));
+      } else if (va) {
+        const auto [x0, x1, z0, z1] = box.bounds;
+        EXPECT_TRUE(w.x >= x0 && w.x <= x1 && w.y >= z0 && w.y <= z1);
+      }
+    });
+  }
+  EXPECT_GT(rejected, 20);
+  EXPECT_GT(kept_unproven, 0);
 }
 
 TEST(Visibility, Deterministic) {

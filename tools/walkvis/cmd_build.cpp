@@ -32,6 +32,7 @@ struct BuildArgs {
   uint64_t visibility_seed = 1;
   bool keep_back_faces = false;
   bool no_fuse_occluders = false;
+  std::string visibility_mode = "sampled";
   bool no_dedup = false;
   uint32_t share_min = PfdOptions{}.share_min;
   uint32_t stat_eyes = 10000;
@@ -135,6 +136,7 @@ int runBuild(const BuildArgs& args) {
   vis_options.seed = args.visibility_seed;
   vis_options = parseSamples(args.samples, vis_options);
   vis_options.fuse_occluders = !args.no_fuse_occluders;
+  vis_options.conservative = args.visibility_mode == "conservative";
   PfdLevelOptions options;
   options.tree.drop_back_faces = !args.keep_back_faces;
   options.max_memory = parseSize(args.max_memory, "--max-memory");
@@ -216,6 +218,7 @@ int runBuild(const BuildArgs& args) {
                     {"refine", vis_options.refine_rays},
                     {"seed", vis_options.seed}};
     j["fuse_occluders"] = vis_options.fuse_occluders;
+    j["visibility_mode"] = args.visibility_mode;
     j["visibility_scene_seconds"] = visibility_seconds;
   }
   j["trees_seconds"] = trees_seconds;
@@ -230,7 +233,7 @@ int runBuild(const BuildArgs& args) {
   j["root_search_work"] = args.root_search_work;
   j["total_bytes"] = used;
   uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0, witnessed = 0, hidden_rays = 0;
-  uint64_t proved_hidden = 0, proof_rays = 0, refine_rays = 0, refined_visible = 0, patch_covers = 0;
+  uint64_t proved_hidden = 0, proof_rays = 0, refine_rays = 0, refined_visible = 0, patch_covers = 0, kept_unproven = 0;
   auto trees = nlohmann::ordered_json::array();
   // Query timing costs a BSP traversal per eye (tens of µs at 20k fragments), so the eyes are
   // spread over the cells: at most 2,000 per cell and about 100,000 for the file (freedoom2 MAP12,
@@ -290,12 +293,14 @@ int runBuild(const BuildArgs& args) {
         e["visibility_refine_rays"] = s.visibility_refine_rays;
         e["visibility_refined_visible"] = s.visibility_refined_visible;
         e["visibility_patch_covers"] = s.visibility_patch_covers;
+        e["visibility_kept_unproven"] = s.visibility_kept_unproven;
       }
       proved_hidden += s.visibility_proved_hidden;
       proof_rays += s.visibility_proof_rays;
       refine_rays += s.visibility_refine_rays;
       refined_visible += s.visibility_refined_visible;
       patch_covers += s.visibility_patch_covers;
+      kept_unproven += s.visibility_kept_unproven;
       witnessed += s.visibility_witnessed;
       hidden_rays += s.visibility_hidden_rays;
       vis_tests += s.visibility_tests;
@@ -332,6 +337,7 @@ int runBuild(const BuildArgs& args) {
     j["visibility_refine_rays"] = refine_rays;
     j["visibility_refined_visible"] = refined_visible;
     j["visibility_patch_covers"] = patch_covers;
+    j["visibility_kept_unproven"] = kept_unproven;
     j["rays_per_second"] = trees_seconds > 0 ? static_cast<double>(vis_rays) / trees_seconds : 0.0;
   }
   if (args.json) {
@@ -385,6 +391,9 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                       std::to_string(VisibilityOptions{}.polygon_samples) + "," +
                       std::to_string(VisibilityOptions{}.refine_rays) + ")");
   sub->add_option("--visibility-seed", args->visibility_seed, "hfd: seed of the visibility sampling");
+  sub->add_option("--visibility", args->visibility_mode,
+                  "hfd: sampled (reject what no sampled ray sees) or conservative (reject only what is proved hidden)")
+      ->check(CLI::IsMember({"sampled", "conservative"}));
   sub->add_flag("--no-fuse-occluders", args->no_fuse_occluders,
                 "hfd: the hiddenness proof uses single blockers only, never patches of joined ones (for comparison)");
   sub->add_flag("--keep-back-faces", args->keep_back_faces,

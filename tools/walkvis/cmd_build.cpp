@@ -89,6 +89,21 @@ VisibilityOptions parseSamples(const std::string& text, VisibilityOptions option
   return options;
 }
 
+// The HFD visibility counters of a tree's statistics, by their JSON names (per tree and summed).
+constexpr std::pair<const char*, uint64_t PfdStats::*> kVisibilityFields[] = {
+    {"visibility_tests", &PfdStats::visibility_tests},
+    {"visibility_rays", &PfdStats::visibility_rays},
+    {"hidden_rejected", &PfdStats::hidden_rejected},
+    {"visibility_witnessed", &PfdStats::visibility_witnessed},
+    {"visibility_hidden_rays", &PfdStats::visibility_hidden_rays},
+    {"visibility_proved_hidden", &PfdStats::visibility_proved_hidden},
+    {"visibility_proof_rays", &PfdStats::visibility_proof_rays},
+    {"visibility_refine_rays", &PfdStats::visibility_refine_rays},
+    {"visibility_refined_visible", &PfdStats::visibility_refined_visible},
+    {"visibility_patch_covers", &PfdStats::visibility_patch_covers},
+    {"visibility_kept_unproven", &PfdStats::visibility_kept_unproven},
+};
+
 struct QueryTiming {
   double pfd_ns = 0.0, runs_ns = 0.0, refs_ns = 0.0, bsp_ns = 0.0;
   double runs_mean = 0.0;  // runs per query
@@ -232,8 +247,8 @@ int runBuild(const BuildArgs& args) {
   j["root_search_lines"] = args.root_search_lines;
   j["root_search_work"] = args.root_search_work;
   j["total_bytes"] = used;
-  uint64_t total_cells = 0, over_bound = 0, vis_tests = 0, vis_rays = 0, rejected = 0, witnessed = 0, hidden_rays = 0;
-  uint64_t proved_hidden = 0, proof_rays = 0, refine_rays = 0, refined_visible = 0, patch_covers = 0, kept_unproven = 0;
+  uint64_t total_cells = 0, over_bound = 0;
+  PfdStats total;  // the visibility counters summed over the trees
   auto trees = nlohmann::ordered_json::array();
   // Query timing costs a BSP traversal per eye (tens of µs at 20k fragments), so the eyes are
   // spread over the cells: at most 2,000 per cell and about 100,000 for the file (freedoom2 MAP12,
@@ -282,30 +297,10 @@ int runBuild(const BuildArgs& args) {
       e["stored_entries"] = stored;
       e["within_entries_bound"] = static_cast<double>(stored) <= entries_bound;
       if (static_cast<double>(stored) > entries_bound) ++over_bound;
-      if (hfd) {
-        e["visibility_tests"] = s.visibility_tests;
-        e["visibility_rays"] = s.visibility_rays;
-        e["hidden_rejected"] = s.hidden_rejected;
-        e["visibility_witnessed"] = s.visibility_witnessed;
-        e["visibility_hidden_rays"] = s.visibility_hidden_rays;
-        e["visibility_proved_hidden"] = s.visibility_proved_hidden;
-        e["visibility_proof_rays"] = s.visibility_proof_rays;
-        e["visibility_refine_rays"] = s.visibility_refine_rays;
-        e["visibility_refined_visible"] = s.visibility_refined_visible;
-        e["visibility_patch_covers"] = s.visibility_patch_covers;
-        e["visibility_kept_unproven"] = s.visibility_kept_unproven;
+      for (const auto& [name, field] : kVisibilityFields) {
+        if (hfd) e[name] = s.*field;
+        total.*field += s.*field;
       }
-      proved_hidden += s.visibility_proved_hidden;
-      proof_rays += s.visibility_proof_rays;
-      refine_rays += s.visibility_refine_rays;
-      refined_visible += s.visibility_refined_visible;
-      patch_covers += s.visibility_patch_covers;
-      kept_unproven += s.visibility_kept_unproven;
-      witnessed += s.visibility_witnessed;
-      hidden_rays += s.visibility_hidden_rays;
-      vis_tests += s.visibility_tests;
-      vis_rays += s.visibility_rays;
-      rejected += s.hidden_rejected;
       ++total_cells;
       const QueryTiming qt = timeQueries(file.bsp, t, std::min<uint32_t>(args.stat_eyes, timing_eyes));
       if (++cells_timed % 50 == 0) progress("query timing: " + std::to_string(cells_timed) + " of " + std::to_string(cell_count) + " cells");
@@ -327,18 +322,8 @@ int runBuild(const BuildArgs& args) {
   j["view_cells"] = total_cells;
   j["trees_over_entries_bound"] = over_bound;
   if (hfd) {
-    j["visibility_tests"] = vis_tests;
-    j["visibility_rays"] = vis_rays;
-    j["hidden_rejected"] = rejected;
-    j["visibility_witnessed"] = witnessed;
-    j["visibility_hidden_rays"] = hidden_rays;
-    j["visibility_proved_hidden"] = proved_hidden;
-    j["visibility_proof_rays"] = proof_rays;
-    j["visibility_refine_rays"] = refine_rays;
-    j["visibility_refined_visible"] = refined_visible;
-    j["visibility_patch_covers"] = patch_covers;
-    j["visibility_kept_unproven"] = kept_unproven;
-    j["rays_per_second"] = trees_seconds > 0 ? static_cast<double>(vis_rays) / trees_seconds : 0.0;
+    for (const auto& [name, field] : kVisibilityFields) j[name] = total.*field;
+    j["rays_per_second"] = trees_seconds > 0 ? static_cast<double>(total.visibility_rays) / trees_seconds : 0.0;
   }
   if (args.json) {
     std::printf("%s\n", j.dump(2).c_str());
@@ -351,9 +336,10 @@ int runBuild(const BuildArgs& args) {
               static_cast<unsigned long long>(total_cells), trees_seconds);
   if (hfd)
     std::printf("hfd: %llu visibility tests, %llu rays (%.3g rays/s over the tree builds), %llu fragments rejected\n",
-                static_cast<unsigned long long>(vis_tests), static_cast<unsigned long long>(vis_rays),
-                trees_seconds > 0 ? static_cast<double>(vis_rays) / trees_seconds : 0.0,
-                static_cast<unsigned long long>(rejected));
+                static_cast<unsigned long long>(total.visibility_tests),
+                static_cast<unsigned long long>(total.visibility_rays),
+                trees_seconds > 0 ? static_cast<double>(total.visibility_rays) / trees_seconds : 0.0,
+                static_cast<unsigned long long>(total.hidden_rejected));
   if (over_bound > 0)
     std::printf("warning: %llu trees store more than N^1.5 log_{4/3} n entries\n",
                 static_cast<unsigned long long>(over_bound));

@@ -930,9 +930,13 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
     const double c0 = tp.n.y * height - tp.d - min_gap;
     for (const auto& piece : sc.pieces) {
       if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
-      // Shrunk by half the samples' inset: region edges usually lie on walls, and an eye on a
-      // wall's plane (or at a room's corner) crosses it nowhere inside its outline. The eyes
-      // given up are the sliver the samples' own inset already gives up.
+      // Shrunk by four times the eye margin of the covers (a patch's separating plane keeps the
+      // margin on both sides, so twice it from the eyes): region edges usually lie on walls, and an
+      // eye on a wall's plane (or at a room's corner) crosses it nowhere inside its outline. No
+      // more than that: HFD regions can be a few samples' insets wide, and eyes of the band given
+      // up here see what the proof would hide (a band of half the inset, as this once was, made
+      // freedoom2 MAP01's pixel error 30 times larger with the proof run before any ray). A piece
+      // too thin to shrink is not proved at all.
       bool empty = false;
       sc.poly = sc.clip;
       for (size_t k = 0; k < sc.poly.size() && !empty; ++k) {
@@ -940,10 +944,10 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
         const double len = glm::length(ab);
         if (!(len > 0.0)) continue;
         const glm::dvec2 inward = glm::dvec2(-ab.y, ab.x) / len;
-        if (!clipHalfPlane(sc.clip, inward, -glm::dot(inward, a) - 0.5 * region_inset, sc.poly2)) empty = true;
+        if (!clipHalfPlane(sc.clip, inward, -glm::dot(inward, a) - 4.0 * min_gap, sc.poly2)) empty = true;
         else sc.clip.swap(sc.poly2);
       }
-      if (empty) continue;
+      if (empty) return 0;
       const uint32_t first = static_cast<uint32_t>(sc.pool.size());
       sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
       sc.items.push_back({first, static_cast<uint32_t>(sc.clip.size()), t_first, t_count, 0});

@@ -172,8 +172,8 @@ struct PfdStats {
   uint64_t hidden_rejected = 0;    // HFD: fragments dropped from a list as hidden
   uint64_t visibility_witnessed = 0;  // HFD: tests saved by an ancestor's witness (not in tree files)
   uint64_t visibility_hidden_rays = 0;  // HFD: rays of the tests answered hidden (not in tree files)
-  // HFD, where the rays went (VisibilityCounters; not in tree files): tests proved hidden by one
-  // occluder per sub-cone, the proof's rays, the refinement's rays, tests it found visible,
+  // HFD, where the rays went (VisibilityCounters; not in tree files): tests proved hidden (one
+  // blocker or one patch per sub-cone), the proof's rays, the refinement's rays, tests it found visible,
   // sub-cones proved by a patch of joined outlines.
   uint64_t visibility_proved_hidden = 0;
   uint64_t visibility_proof_rays = 0;

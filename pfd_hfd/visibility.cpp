@@ -247,6 +247,11 @@ struct EdgePartners {
   std::vector<uint32_t> owner;     // per edge, its outline
 };
 
+// The edge after e in its outline's ring (outline_first as in Impl, owner as in EdgePartners).
+uint32_t nextInRing(const std::vector<uint32_t>& outline_first, const std::vector<uint32_t>& owner, uint32_t e) {
+  return e + 1 == outline_first[owner[e] + 1] ? outline_first[owner[e]] : e + 1;
+}
+
 EdgePartners collinearPartners(const std::vector<uint32_t>& outline_first, const std::vector<glm::dvec3>& verts,
                                double cell, double tol) {
   EdgePartners ep;
@@ -255,7 +260,8 @@ EdgePartners collinearPartners(const std::vector<uint32_t>& outline_first, const
   ep.owner.assign(edges, 0);
   for (uint32_t o = 0; o < outlines; ++o)
     for (uint32_t e = outline_first[o]; e < outline_first[o + 1]; ++e) ep.owner[e] = o;
-  auto next = [&](uint32_t e) { return e + 1 == outline_first[ep.owner[e] + 1] ? outline_first[ep.owner[e]] : e + 1; };
+  auto next = [&](uint32_t e) { return nextInRing(outline_first, ep.owner, e); };
+  auto tiny = [&](uint32_t e) { return outline_first[ep.owner[e] + 1] - outline_first[ep.owner[e]] < 3; };
   auto cellKey = [&](int64_t x, int64_t y, int64_t z) {
     return mixHash(mixHash(mixHash(0, static_cast<uint64_t>(x)), static_cast<uint64_t>(y)), static_cast<uint64_t>(z));
   };
@@ -266,14 +272,16 @@ EdgePartners collinearPartners(const std::vector<uint32_t>& outline_first, const
     const double len = glm::length(verts[next(e)] - verts[e]);
     return static_cast<uint32_t>(std::min(1e6, std::ceil(2.0 * len / cell))) + 1;
   };
+  auto sampleCell = [&](uint32_t e, uint32_t k, uint32_t n) {
+    return cellOf(verts[e] + (verts[next(e)] - verts[e]) * (static_cast<double>(k) / n));
+  };
   std::unordered_map<uint64_t, std::vector<uint32_t>> grid;
   for (uint32_t e = 0; e < edges; ++e) {
-    if (outline_first[ep.owner[e] + 1] - outline_first[ep.owner[e]] < 3) continue;
-    const glm::dvec3 a = verts[e], b = verts[next(e)];
+    if (tiny(e)) continue;
     const uint32_t n = samples(e);
     uint64_t last = 0;
     for (uint32_t k = 0; k <= n; ++k) {
-      const glm::dvec3 c = cellOf(a + (b - a) * (static_cast<double>(k) / n));
+      const glm::dvec3 c = sampleCell(e, k, n);
       const uint64_t key = cellKey(static_cast<int64_t>(c.x), static_cast<int64_t>(c.y), static_cast<int64_t>(c.z));
       if (k > 0 && key == last) continue;
       last = key;
@@ -285,7 +293,7 @@ EdgePartners collinearPartners(const std::vector<uint32_t>& outline_first, const
   std::vector<uint32_t> found;
   for (uint32_t e = 0; e < edges; ++e) {
     ep.first[e] = static_cast<uint32_t>(ep.partners.size());
-    if (outline_first[ep.owner[e] + 1] - outline_first[ep.owner[e]] < 3) continue;
+    if (tiny(e)) continue;
     const glm::dvec3 a = verts[e], b = verts[next(e)];
     const double len = glm::length(b - a);
     if (!(len > tol)) continue;
@@ -293,7 +301,7 @@ EdgePartners collinearPartners(const std::vector<uint32_t>& outline_first, const
     found.clear();
     const uint32_t n = samples(e);
     for (uint32_t k = 0; k <= n; ++k) {
-      const glm::dvec3 c = cellOf(a + (b - a) * (static_cast<double>(k) / n));
+      const glm::dvec3 c = sampleCell(e, k, n);
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
@@ -369,6 +377,7 @@ struct Scratch {
   std::vector<glm::dvec3> hull3;  // the segments' hull: region part and target part, in 3D
   std::vector<glm::dvec3> region3, target3;
   std::vector<double> breaks;
+  std::vector<glm::dvec2> spans;  // partner edges in the patch, as (start, end) along an edge
 };
 
 Scratch& scratch() {
@@ -394,9 +403,10 @@ struct VisibilityScene::Impl {
   std::vector<uint32_t> outline_first;
   std::vector<glm::dvec3> outline_vertices;
   // The same outlines in their own plane's basis (planeBasis(plane.n), origin plane.n * plane.d),
-  // and their planes, for the single-occluder proof.
+  // and their planes, for the proof.
   std::vector<glm::dvec2> outline_2d;
   std::vector<Plane> outline_plane;
+  std::vector<std::array<glm::dvec3, 2>> outline_basis;  // planeBasis(outline_plane[o].n)
   // Per outline edge (index outline_first[o] + k, from vertex k to k + 1), the edges of other
   // outlines along the same line that overlap it: where they run the other way the two outlines
   // are consistently oriented neighbours there (a wall and the next, or the three walls beside
@@ -444,6 +454,24 @@ struct VisibilityScene::Impl {
     return true;
   }
 
+  // How far a point x of outline o's plane lies inside the outline: the least distance to the
+  // lines of its edges, negative outside.
+  double clearance(uint32_t o, const glm::dvec3& x) const {
+    const glm::dvec3 rel_x = x - outline_plane[o].n * outline_plane[o].d;
+    const glm::dvec2 q{glm::dot(rel_x, outline_basis[o][0]), glm::dot(rel_x, outline_basis[o][1])};
+    const uint32_t of = outline_first[o], oc = outline_first[o + 1] - of;
+    double least = std::numeric_limits<double>::infinity();
+    for (uint32_t k = 0; k < oc; ++k) {
+      const glm::dvec2 a = outline_2d[of + k], ab = outline_2d[of + (k + 1) % oc] - a;
+      const double len = glm::length(ab);
+      if (len > 0.0) least = std::min(least, cross2(ab, q - a) / len);
+    }
+    return least;
+  }
+
+  // The edge after e in its outline's ring.
+  uint32_t nextEdge(uint32_t e) const { return nextInRing(outline_first, edge_partners.owner, e); }
+
   // True when every segment from conv(region3) to conv(target3) meets the front side of an
   // outline of one patch grown from `seed`: outlines joined across shared, oppositely oriented
   // edges (Impl::edge_partners), so that the patch is an oriented surface whose boundary is where
@@ -473,7 +501,7 @@ struct VisibilityScene::Impl {
     auto add = [&](uint32_t o) {
       sc.outline_stamp[o] = stamp;
       sc.patch.push_back(o);
-      for (uint32_t e = outline_first[o]; e < outline_first[o + 1]; ++e) sc.patch_edges.insert(sc.patch_edges.end(), {o, e});
+      for (uint32_t e = outline_first[o]; e < outline_first[o + 1]; ++e) sc.patch_edges.push_back(e);
     };
     if (seed == target_outline || outline_first[seed + 1] - outline_first[seed] < 3) return false;
     add(seed);
@@ -481,25 +509,24 @@ struct VisibilityScene::Impl {
     while (!sc.patch_edges.empty()) {
       const uint32_t e = sc.patch_edges.back();
       sc.patch_edges.pop_back();
-      const uint32_t o = sc.patch_edges.back();
-      sc.patch_edges.pop_back();
-      const uint32_t next = e + 1 == outline_first[o + 1] ? outline_first[o] : e + 1;
-      const glm::dvec3 a = outline_vertices[e], b = outline_vertices[next];
+      const glm::dvec3 a = outline_vertices[e], b = outline_vertices[nextEdge(e)];
       const double len = glm::length(b - a);
       if (!(len > 0.0)) continue;
       const glm::dvec3 u = (b - a) / len;
       // The patch's boundary along this edge: where the edge and the partners in the patch do not
-      // cancel (one running each way). Breakpoints at the partners' ends; each stretch between
-      // two has one multiplicity.
-      sc.breaks.clear();
-      sc.breaks.push_back(0.0);
-      sc.breaks.push_back(len);
+      // cancel (one running each way). The partners in the patch as intervals along the edge; the
+      // breakpoints at their ends cut it into stretches of one multiplicity each.
+      sc.spans.clear();
       for (uint32_t i = ep.first[e]; i < ep.first[e + 1]; ++i) {
         const uint32_t f = ep.partners[i];
         if (sc.outline_stamp[ep.owner[f]] != stamp) continue;
-        const uint32_t fn = f + 1 == outline_first[ep.owner[f] + 1] ? outline_first[ep.owner[f]] : f + 1;
-        for (uint32_t v : {f, fn}) sc.breaks.push_back(std::clamp(glm::dot(outline_vertices[v] - a, u), 0.0, len));
+        sc.spans.push_back({glm::dot(outline_vertices[f] - a, u), glm::dot(outline_vertices[nextEdge(f)] - a, u)});
       }
+      sc.breaks.clear();
+      sc.breaks.push_back(0.0);
+      sc.breaks.push_back(len);
+      for (const glm::dvec2& sp : sc.spans)
+        for (double t : {sp.x, sp.y}) sc.breaks.push_back(std::clamp(t, 0.0, len));
       std::sort(sc.breaks.begin(), sc.breaks.end());
       bool open = false;  // some boundary stretch comes near the hull
       for (size_t k = 0; k + 1 < sc.breaks.size() && !open; ++k) {
@@ -507,13 +534,8 @@ struct VisibilityScene::Impl {
         if (!(t1 - t0 > min_crack)) continue;  // a crack below the partners' tolerance
         const double mid = 0.5 * (t0 + t1);
         int net = 1;
-        for (uint32_t i = ep.first[e]; i < ep.first[e + 1]; ++i) {
-          const uint32_t f = ep.partners[i];
-          if (sc.outline_stamp[ep.owner[f]] != stamp) continue;
-          const uint32_t fn = f + 1 == outline_first[ep.owner[f] + 1] ? outline_first[ep.owner[f]] : f + 1;
-          const double tf0 = glm::dot(outline_vertices[f] - a, u), tf1 = glm::dot(outline_vertices[fn] - a, u);
-          if (std::min(tf0, tf1) <= mid && mid <= std::max(tf0, tf1)) net += tf1 < tf0 ? -1 : 1;
-        }
+        for (const glm::dvec2& sp : sc.spans)
+          if (std::min(sp.x, sp.y) <= mid && mid <= std::max(sp.x, sp.y)) net += sp.y < sp.x ? -1 : 1;
         if (net == 0) continue;
         const glm::dvec3 piece[2] = {a + t0 * u, a + t1 * u};
         open = !hullsSeparated(piece, sc.hull3, margin);
@@ -524,14 +546,13 @@ struct VisibilityScene::Impl {
       for (uint32_t i = ep.first[e]; i < ep.first[e + 1]; ++i) {
         const uint32_t f = ep.partners[i], q = ep.owner[f];
         if (sc.outline_stamp[q] == stamp) continue;
-        const uint32_t fn = f + 1 == outline_first[q + 1] ? outline_first[q] : f + 1;
-        if (!(glm::dot(outline_vertices[fn] - outline_vertices[f], u) < 0.0)) continue;
+        if (!(glm::dot(outline_vertices[nextEdge(f)] - outline_vertices[f], u) < 0.0)) continue;
         if (q == target_outline || sc.patch.size() >= kMaxPatch) return false;
         add(q);
         grown = true;
       }
       if (!grown) return false;  // an opening (or a same-way overlap) next to the segments
-      sc.patch_edges.insert(sc.patch_edges.end(), {o, e});  // look again with the new partners
+      sc.patch_edges.push_back(e);  // look again with the new partners
     }
     // The ends: eyes off the patch by the margin, target points by the end gap (the rays stop that
     // far short of the target's plane; a crossing nearer would not be cast).
@@ -566,20 +587,9 @@ struct VisibilityScene::Impl {
       const double de = glm::dot(op.n, e) - op.d, dp = glm::dot(op.n, p) - op.d;
       // An end on the plane lies off the outline (the hull tests above): no crossing there.
       if (!((de > 0.0 && dp < 0.0) || (de < 0.0 && dp > 0.0))) continue;
-      glm::dvec3 ou, ow;
-      planeBasis(op.n, ou, ow);
-      const glm::dvec3 x = e + (de / (de - dp)) * (p - e) - op.n * op.d;
-      const glm::dvec2 q{glm::dot(x, ou), glm::dot(x, ow)};
-      const uint32_t of = outline_first[o], oc = outline_first[o + 1] - of;
-      bool outside = false, near = false;
-      for (uint32_t k = 0; k < oc && !outside; ++k) {
-        const glm::dvec2 a = outline_2d[of + k], ab = outline_2d[of + (k + 1) % oc] - a;
-        const double c = cross2(ab, q - a), len = glm::length(ab);
-        outside = c < -margin * len;
-        near = near || !(c > margin * len);
-      }
-      if (outside) continue;
-      if (near) return std::nullopt;
+      const double c = clearance(o, e + (de / (de - dp)) * (p - e));
+      if (c < -margin) continue;
+      if (!(c > margin)) return std::nullopt;  // too near an edge to count in double precision
       count += de > 0.0 ? 1 : -1;
     }
     return count;
@@ -709,6 +719,7 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
       }
       s.outline_2d.insert(s.outline_2d.end(), hull.begin(), hull.end());
       s.outline_plane.push_back(pl);
+      s.outline_basis.push_back({u, w});
       s.outline_first.push_back(static_cast<uint32_t>(s.outline_vertices.size()));
       for (size_t k = i; k < j; ++k) s.fragment_outline[order[k]] = o;
       i = j;
@@ -878,19 +889,20 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
 
   glm::dvec3 clear_eye{0.0};  // the eye of the unblocked ray that answers "visible" (the witness)
 
-  // ---- 0. proof by one occluder per sub-cone (exact, used after the first packet) ----
+  // ---- 0. proof by one occluder (a blocker, or a patch of them) per sub-cone (exact, used after
+  // the first packet) ----
   // The segments from a convex region piece R (at the height) to a convex part T of the inset
   // target fill conv(R ∪ T); where R lies strictly in front of a blocker's plane and T strictly
   // behind, they cross that plane inside conv of the crossings of the vertex-to-vertex segments.
   // So when those crossings all lie inside the blocker's outline (by a margin), every sampled ray
   // would be blocked by its front side: the fragment is hidden from R with no further rays. The
-  // candidate blockers are those met by a ray from R's centroid to T's centroid; where none
-  // covers, the larger of R and T is halved and each half proved alone, within a ray budget.
+  // candidate blockers are those met by a ray from R's centroid to T's centroid, alone or grown
+  // into a patch (Impl::patchCovers); where none covers, the larger of R and T is halved and each
+  // half proved alone, within a ray budget.
   // Returns 1 proved hidden, 2 a ray was unblocked (visible), 0 neither.
   auto covers = [&](uint32_t o, std::span<const glm::dvec2> rp, std::span<const glm::dvec2> tq) -> bool {
     const Plane& op = s.outline_plane[o];
-    const uint32_t of = s.outline_first[o], oc = s.outline_first[o + 1] - of;
-    if (oc < 3) return false;
+    if (s.outline_first[o + 1] - s.outline_first[o] < 3) return false;
     // The margin: the minimum gap, 16 times the single-precision rounding of Embree's
     // coordinates, so that a crossing proved inside is inside the float triangles too (and below
     // the region's shrink, so that a room's own wall can cover eyes near it).
@@ -899,23 +911,13 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       if (!(glm::dot(op.n, eyeAt(r)) - op.d > margin)) return false;
     for (const auto& t : tq)
       if (!(glm::dot(op.n, target3(t)) - op.d < -margin)) return false;
-    glm::dvec3 ou, ow;
-    planeBasis(op.n, ou, ow);
-    const glm::dvec3 obase = op.n * op.d;
-    const glm::dvec2* ov = s.outline_2d.data() + of;
     for (const auto& r : rp) {
       const glm::dvec3 r3 = eyeAt(r);
       const double dr = glm::dot(op.n, r3) - op.d;
       for (const auto& t : tq) {
         const glm::dvec3 t3 = target3(t);
         const double dt = glm::dot(op.n, t3) - op.d;
-        const glm::dvec3 x = r3 + (dr / (dr - dt)) * (t3 - r3) - obase;
-        const glm::dvec2 q{glm::dot(x, ou), glm::dot(x, ow)};
-        for (uint32_t k = 0; k < oc; ++k) {
-          const glm::dvec2 a = ov[k], ab = ov[(k + 1) % oc] - a;
-          const double len = glm::length(ab);
-          if (!(cross2(ab, q - a) >= margin * len)) return false;
-        }
+        if (!(s.clearance(o, r3 + (dr / (dr - dt)) * (t3 - r3)) >= margin)) return false;
       }
     }
     return true;
@@ -990,6 +992,7 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
       bool covered = false;
       double tnear = 0.0;
       uint32_t last_outline = UINT32_MAX;
+      bool parts3 = false;
       for (uint32_t hits = 0; hits < kProofHits && budget > 0 && !covered; ++hits) {
         Hit hit;
         const int r = castClear(e, p, &hit, tnear);
@@ -1005,10 +1008,13 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
         last_outline = o;
         covered = covers(o, rp, tq);
         if (!covered && opt.fuse_occluders) {
-          sc.region3.clear();
-          sc.target3.clear();
-          for (const auto& rv : rp) sc.region3.push_back(eyeAt(rv));
-          for (const auto& t : tq) sc.target3.push_back(target3(t));
+          if (!parts3) {  // the item's parts in 3D, once for all the blockers tried
+            sc.region3.clear();
+            sc.target3.clear();
+            for (const auto& rv : rp) sc.region3.push_back(eyeAt(rv));
+            for (const auto& t : tq) sc.target3.push_back(target3(t));
+            parts3 = true;
+          }
           covered = s.patchCovers(o, s.fragment_outline[fragment], sc.region3, sc.target3, min_gap, end_gap, min_gap, sc);
           if (covered) ++counters.patch_covers;
         }

@@ -49,7 +49,7 @@ struct VisibilityOptions {
   // a corridor's walls hide what lies past its bend together). Not stored in tree files.
   bool fuse_occluders = true;
   // Conservative: a fragment is rejected only when the proof shows it hidden from the whole
-  // region (but for the band of eyes within half the region inset of its edges); a test the
+  // region (but for the band of eyes within 4e-6 of the extent of its edges); a test the
   // proof cannot settle, within conservative_proof_rays, keeps the fragment (no witness then).
   // Not stored in tree files.
   bool conservative = false;
@@ -61,7 +61,7 @@ struct VisibilityCounters {
   uint64_t rays = 0;     // occlusion rays cast
   uint64_t visible = 0;  // queries answered "visible"
   uint64_t hidden_rays = 0;  // rays of the queries answered "hidden" (counted by visibleBatch)
-  uint64_t proved_hidden = 0;  // queries answered "hidden" by the single-occluder proof
+  uint64_t proved_hidden = 0;  // queries answered "hidden" by the proof (a blocker or a patch per sub-cone)
   uint64_t proof_rays = 0;     // rays cast by that proof (answered or not)
   uint64_t refine_rays = 0;    // rays cast by the refinement past blockers' edges
   uint64_t refined_visible = 0;  // queries answered "visible" by the refinement (uniform rays missed them)

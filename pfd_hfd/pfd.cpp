@@ -6,17 +6,54 @@
 #include <algorithm>
 #include <cmath>
 
+#include <glm/common.hpp>
+
 #include "pfd_hfd/pfd.h"
 
 namespace walkvis {
 namespace {
 
-// Calls emit(run index) for each flat run that `ref` (a run, or a sequence) expands to, in order.
-// A sequence nests at most kPfdMaxSeqDepth deep (the builder and the loader ensure it).
+// Calls emit(run index) for each run of detail object `object` in backToFront's order for `eye`
+// (skipping back faces), walking its nodes by their parent links: no stack, whatever its depth.
+// As backToFront, an eye on a node's plane takes the order of an eye in front and draws none of
+// the node's fragments. Returns the plane tests (one per node).
 template <typename Emit>
-inline void forEachRun(const PfdTree& tree, uint32_t ref, Emit&& emit) {
+inline uint32_t forEachObjectRun(const PfdTree& tree, uint32_t object, const glm::dvec3& eye, Emit&& emit) {
+  const PfdObject& o = tree.objects[object];
+  const PfdObjectNode* nodes = tree.object_nodes.data();
+  int32_t cur = static_cast<int32_t>(o.root), prev = -1;
+  while (cur >= 0) {
+    const PfdObjectNode& n = nodes[cur];
+    const int s = planeSide(tree.planes[n.plane], eye);
+    const int32_t far_child = s >= 0 ? n.back : n.front, near_child = s >= 0 ? n.front : n.back;
+    const int32_t from = prev;
+    prev = cur;
+    if (from == n.parent && far_child >= 0) {  // arrived: the far side first
+      cur = far_child;
+      continue;
+    }
+    if (from == n.parent || from == far_child) {  // the far side done: the node, then the near side
+      const uint32_t run = s > 0 ? n.front_run : s < 0 ? n.back_run : kPfdNoRun;
+      if (run != kPfdNoRun) emit(run);
+      if (near_child >= 0) {
+        cur = near_child;
+        continue;
+      }
+    }
+    cur = n.parent;  // both sides done
+  }
+  return o.nodes;
+}
+
+// Calls emit(run index) for each flat run that `ref` (a run, a sequence or an object) expands to
+// for `eye`, in order; adds the object plane tests to `object_tests`. A sequence nests at most
+// kPfdMaxSeqDepth deep (the builder and the loader ensure it).
+template <typename Emit>
+inline void forEachRun(const PfdTree& tree, uint32_t ref, const glm::dvec3& eye, uint32_t& object_tests,
+                       Emit&& emit) {
   if (!(ref & kPfdSeqBit)) {
-    emit(ref);
+    if (ref & kPfdObjectBit) object_tests += forEachObjectRun(tree, ref & ~kPfdObjectBit, eye, emit);
+    else emit(ref);
     return;
   }
   struct Frame {
@@ -34,7 +71,8 @@ inline void forEachRun(const PfdTree& tree, uint32_t ref, Emit&& emit) {
     }
     const uint32_t item = tree.seq_items[f.next++];
     if (!(item & kPfdSeqBit)) {
-      emit(item);
+      if (item & kPfdObjectBit) object_tests += forEachObjectRun(tree, item & ~kPfdObjectBit, eye, emit);
+      else emit(item);
       continue;
     }
     const PfdSeq& c = tree.seqs[item & ~kPfdSeqBit];
@@ -42,15 +80,19 @@ inline void forEachRun(const PfdTree& tree, uint32_t ref, Emit&& emit) {
   }
 }
 
-inline void appendList(const PfdTree& tree, const PfdNode& node, std::vector<uint32_t>& order) {
+// Appends the node's list for `eye`; returns the object plane tests.
+inline uint32_t appendList(const PfdTree& tree, const PfdNode& node, const glm::dvec3& eye,
+                           std::vector<uint32_t>& order) {
   const uint32_t end = node.first_ref + node.ref_count;
+  uint32_t object_tests = 0;
   for (uint32_t r = node.first_ref; r < end; ++r) {
-    forEachRun(tree, tree.run_refs[r], [&](uint32_t run_index) {
+    forEachRun(tree, tree.run_refs[r], eye, object_tests, [&](uint32_t run_index) {
       const PfdRun& run = tree.runs[run_index];
       const uint32_t* ids = tree.fragment_ids.data() + run.first;
       order.insert(order.end(), ids, ids + run.count);
     });
   }
+  return object_tests;
 }
 
 uint64_t splitmix(uint64_t& state) {
@@ -91,16 +133,24 @@ PfdQueryResult walkPath(const PfdTree& tree, const glm::dvec3& eye, Visit&& visi
 // The walk of the run queries: emit(run index) for each node's list in order.
 template <typename Emit>
 PfdQueryResult walkRuns(const PfdTree& tree, const glm::dvec3& eye, Emit&& emit) {
-  return walkPath(tree, eye, [&](const PfdNode& node) {
-    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r) forEachRun(tree, tree.run_refs[r], emit);
+  uint32_t object_tests = 0;
+  PfdQueryResult result = walkPath(tree, eye, [&](const PfdNode& node) {
+    for (uint32_t r = node.first_ref; r < node.first_ref + node.ref_count; ++r)
+      forEachRun(tree, tree.run_refs[r], eye, object_tests, emit);
   });
+  result.object_tests = object_tests;
+  return result;
 }
 
 }  // namespace
 
 PfdQueryResult pfdQuery(const PfdTree& tree, const glm::dvec3& eye, std::vector<uint32_t>& order) {
   order.clear();
-  return walkPath(tree, eye, [&](const PfdNode& node) { appendList(tree, node, order); });
+  uint32_t object_tests = 0;
+  PfdQueryResult result =
+      walkPath(tree, eye, [&](const PfdNode& node) { object_tests += appendList(tree, node, eye, order); });
+  result.object_tests = object_tests;
+  return result;
 }
 
 PfdQueryResult pfdQueryRuns(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRun>& runs) {
@@ -120,29 +170,35 @@ PfdQueryResult pfdQueryRefs(const PfdTree& tree, const glm::dvec3& eye, std::vec
   });
 }
 
-void pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, std::vector<uint32_t>& run_ids) {
+uint32_t pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, const glm::dvec3& eye,
+                       std::vector<uint32_t>& run_ids) {
+  uint32_t object_tests = 0;
   for (const PfdRefRange& l : lists) {
     for (uint32_t r = l.first; r < l.first + l.count; ++r) {
-      forEachRun(tree, tree.run_refs[r], [&](uint32_t run) { run_ids.push_back(run); });
+      forEachRun(tree, tree.run_refs[r], eye, object_tests, [&](uint32_t run) { run_ids.push_back(run); });
     }
   }
+  return object_tests;
 }
 
 PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdCursor& cursor,
                                 std::vector<uint32_t>& order) {
   PfdQueryResult result;
   const bool valid = cursor.tree == &tree && !cursor.path.empty() &&
-                     cursor.path.size() == cursor.order_size.size() && order.size() >= cursor.order_size.back();
+                     cursor.path.size() == cursor.order_size.size() && order.size() >= cursor.order_size.back() &&
+                     cursor.fixed <= cursor.path.size();
   cursor.tree = &tree;
   if (tree.nodes.empty()) {
     order.clear();
     cursor.path.clear();
     cursor.order_size.clear();
+    cursor.fixed = 0;
     return result;
   }
   uint32_t cur = 0;
   if (valid) {
-    // Re-test the stored path; stop at the first node the eye no longer reaches.
+    // Re-test the stored path; stop at the first node the eye no longer reaches, or at the first
+    // list holding an object (its order may have changed with the eye).
     size_t k = 1;
     for (; k < cursor.path.size(); ++k) {
       const PfdNode& node = tree.nodes[cursor.path[k - 1]];
@@ -152,21 +208,35 @@ PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdC
       cur = static_cast<uint32_t>(s > 0 ? node.front : node.back);
       if (cur != cursor.path[k]) break;
     }
-    if (k == cursor.path.size()) return result;  // the same leaf: the order stands
-    order.resize(cursor.order_size[k]);          // keep the lists of path[0, k)
+    if (k == cursor.path.size() && cursor.fixed == k) return result;  // the same leaf, no object: the order stands
+    if (k > cursor.fixed) {
+      // The lists from `fixed` on are walked again, from the node the eye still reaches there.
+      k = cursor.fixed;
+      cur = cursor.path[k];
+      // The tests below `fixed` were made again above; the walk below repeats them, so uncount.
+      result.tests = static_cast<uint32_t>(k);
+    }
+    order.resize(cursor.order_size[k]);  // keep the lists of path[0, k)
     cursor.path.resize(k);
     cursor.order_size.resize(k);
+    cursor.fixed = std::min(cursor.fixed, static_cast<uint32_t>(k));
   } else {
     order.clear();
     cursor.path.clear();
     cursor.order_size.clear();
+    cursor.fixed = 0;
   }
   if (cursor.path.empty()) cur = 0;
+  bool fixed = true;  // cursor.fixed == cursor.path.size() here
   for (;;) {
     cursor.path.push_back(cur);
     cursor.order_size.push_back(static_cast<uint32_t>(order.size()));
     const PfdNode& node = tree.nodes[cur];
-    appendList(tree, node, order);
+    const uint32_t object_tests = appendList(tree, node, eye, order);
+    result.object_tests += object_tests;
+    // A list with an object expands to at least one plane test.
+    if (fixed && object_tests == 0) cursor.fixed = static_cast<uint32_t>(cursor.path.size());
+    else fixed = false;
     if (node.front < 0) break;
     const int s = planeSide(tree.planes[node.plane], eye);
     ++result.tests;
@@ -174,6 +244,43 @@ PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdC
     cur = static_cast<uint32_t>(s > 0 ? node.front : node.back);
   }
   return result;
+}
+
+std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent) {
+  const size_t n = bsp.nodes.size();
+  std::vector<uint8_t> out(n, 0);
+  if (!(extent > 0.0) || n == 0) return out;
+  // Bottom up (children have larger indices): each subtree's box and whether all its fragments
+  // lie in their node's plane (orientation ±1: facing follows the node's side).
+  std::vector<glm::dvec3> lo(n, glm::dvec3(HUGE_VAL)), hi(n, glm::dvec3(-HUGE_VAL));
+  std::vector<uint8_t> plain(n, 1);
+  for (size_t i = n; i-- > 0;) {
+    const BspNode& node = bsp.nodes[i];
+    for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) {
+      plain[i] &= bsp.fragment_orientation[f] != 0;
+      for (const glm::dvec3& v : bsp.fragmentVertices(f)) {
+        lo[i] = glm::min(lo[i], v);
+        hi[i] = glm::max(hi[i], v);
+      }
+    }
+    for (const int32_t c : {node.front, node.back}) {
+      if (c < 0) continue;
+      lo[i] = glm::min(lo[i], lo[c]);
+      hi[i] = glm::max(hi[i], hi[c]);
+      plain[i] &= plain[c];
+    }
+  }
+  // Top down: the maximal such subtrees.
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t p = bsp.nodes[i].parent;
+    if (p >= 0 && out[p] != 0) {
+      out[i] = 2;
+      continue;
+    }
+    const glm::dvec3 e = hi[i] - lo[i];
+    if (plain[i] && lo[i].x <= hi[i].x && std::max({e.x, e.y, e.z}) <= extent) out[i] = 1;
+  }
+  return out;
 }
 
 glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state) {
@@ -204,7 +311,8 @@ void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed) {
   s.bytes = tree.nodes.size() * sizeof(PfdNode) + tree.run_refs.size() * sizeof(uint32_t) +
             tree.runs.size() * sizeof(PfdRun) + tree.fragment_ids.size() * sizeof(uint32_t) +
             tree.seqs.size() * sizeof(PfdSeq) + tree.seq_items.size() * sizeof(uint32_t) +
-            tree.planes.size() * sizeof(Plane);
+            tree.planes.size() * sizeof(Plane) + tree.objects.size() * sizeof(PfdObject) +
+            tree.object_nodes.size() * sizeof(PfdObjectNode);
   for (const auto& ring : tree.region) s.bytes += ring.size() * sizeof(glm::dvec2);
   s.tests_mean = 0.0;
   s.tests_max = 0;

@@ -109,7 +109,21 @@ struct PfdOptions {
   // back-facing fragments are listed too, where backToFront(bsp, eye, order, false) puts them, for
   // run-time culling methods.
   bool drop_back_faces = true;
+  // Detail objects (docs/DESIGN.md, "Detail objects in lists"): with drop_back_faces, every
+  // maximal BSP subtree whose fragments fit in a box of largest side <= object_extent (scene
+  // units; 0 = none) and lie in their nodes' planes (orientation ±1) is listed as ONE entry, an
+  // object (PfdTree::objects), that a query expands by walking the subtree's own planes for the
+  // eye, back to front. Its planes are never test-lines: a chair's dozens of small planes no longer
+  // split every region they cross, at the cost of one plane test per object node in each query
+  // that lists it (PfdQueryResult::object_tests). The order stays exactly backToFront's. HFD drops
+  // an object whose fragments are all hidden from the region, else lists it whole.
+  // PfdLevelOptions::object_extent sets it from the eye height.
+  double object_extent = 0.0;
 };
+
+// The detail objects of `bsp` at `extent` (PfdOptions::object_extent): per BSP node 1 where an
+// object is rooted, 2 strictly inside one, 0 elsewhere (the structure). All 0 for extent <= 0.
+std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent);
 
 enum class TreeKind : uint8_t { kPfd = 0, kHfd = 1 };
 const char* treeKindName(TreeKind kind);  // "pfd", "hfd"
@@ -181,6 +195,9 @@ struct PfdStats {
   uint64_t visibility_refined_visible = 0;
   uint64_t visibility_patch_covers = 0;
   uint64_t visibility_kept_unproven = 0;  // conservative mode: tests kept for want of a proof
+  uint64_t objects = 0;           // detail objects the lists refer to (PfdOptions::object_extent)
+  uint64_t object_nodes = 0;      // their BSP nodes
+  uint64_t object_fragments = 0;  // their fragments
   uint64_t bytes = 0;             // the tree's arrays
   double build_seconds = 0.0;
 };
@@ -198,8 +215,11 @@ struct PfdRun {
   uint32_t count = 0;
 };
 
-// A list entry or sequence item: a run index, or kPfdSeqBit | a sequence index.
+// A list entry or sequence item: a run index, kPfdSeqBit | a sequence index, or kPfdObjectBit | an
+// object index (runs and sequences number below kPfdObjectBit).
 constexpr uint32_t kPfdSeqBit = 0x80000000u;
+constexpr uint32_t kPfdObjectBit = 0x40000000u;
+constexpr uint32_t kPfdNoRun = UINT32_MAX;
 // Sequences nest at most this deep (a sequence of depth d holds items of depth < d; a run has
 // depth 0): a query expands them with a fixed stack.
 constexpr uint32_t kPfdMaxSeqDepth = 16;
@@ -207,7 +227,24 @@ constexpr uint32_t kPfdMaxSeqDepth = 16;
 struct PfdSeq {
   uint32_t first = 0;   // seq_items[first, first + count): runs or sequences of smaller index
   uint32_t count = 0;
-  uint32_t length = 0;  // fragment ids it expands to
+  uint32_t length = 0;  // fragment ids it expands to (an object counted with all its fragments)
+};
+
+// A node of a detail object: a BSP node's plane and its fragments by facing, as flat runs.
+struct PfdObjectNode {
+  uint32_t plane = 0;            // index into PfdTree::planes: exactly the BSP node's plane
+  int32_t front = -1;            // children: indices into PfdTree::object_nodes, larger than this one
+  int32_t back = -1;
+  int32_t parent = -1;           // -1 at the object's root
+  uint32_t front_run = kPfdNoRun;  // run (PfdTree::runs) of the fragments facing an eye in front
+  uint32_t back_run = kPfdNoRun;   // and of those facing an eye behind; kPfdNoRun: none
+};
+
+// A BSP subtree listed as one entry (PfdOptions::object_extent).
+struct PfdObject {
+  uint32_t root = 0;       // PfdTree::object_nodes[root, root + nodes), root first
+  uint32_t nodes = 0;
+  uint32_t fragments = 0;  // all its fragments, both facings
 };
 
 // An axis-aligned box of the xz-plane: a view cell. The region of a tree is W clipped to it.
@@ -226,6 +263,8 @@ struct PfdTree {
   std::vector<PfdSeq> seqs;
   std::vector<uint32_t> seq_items;              // runs or sequences (kPfdSeqBit)
   std::vector<uint32_t> fragment_ids;           // BSP fragment indices
+  std::vector<PfdObject> objects;               // detail objects (kPfdObjectBit references)
+  std::vector<PfdObjectNode> object_nodes;
   PfdStats stats;
 };
 
@@ -243,11 +282,13 @@ struct PfdLineCount {
   uint64_t crossing = 0;
   double area = 0.0;
 };
+// Lines inside detail objects at object_extent (PfdOptions) are not counted: they are never tested.
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                           const std::optional<PfdBox>& cell);
+                           const std::optional<PfdBox>& cell, double object_extent = 0.0);
 
 struct PfdQueryResult {
   uint32_t tests = 0;     // plane tests made (= internal nodes on the path)
+  uint32_t object_tests = 0;  // plane tests inside the detail objects expanded (one per object node)
   bool on_line = false;   // the eye lay exactly on a test-line (went to the back child; the order
                           // is then only guaranteed where the BSP also counts the eye as behind)
 };
@@ -275,15 +316,20 @@ struct PfdRefRange {
   uint32_t count = 0;
 };
 PfdQueryResult pfdQueryRefs(const PfdTree& tree, const glm::dvec3& eye, std::vector<PfdRefRange>& lists);
-// Appends the flat run indices (into tree.runs) that `lists` expand to, in order.
-void pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, std::vector<uint32_t>& run_ids);
+// Appends the flat run indices (into tree.runs) that `lists` expand to for `eye` (the eye orders
+// the detail objects), in order; returns the object plane tests made.
+uint32_t pfdExpandRefs(const PfdTree& tree, std::span<const PfdRefRange> lists, const glm::dvec3& eye,
+                       std::vector<uint32_t>& run_ids);
 
 // Frame coherence: the path of the last query and where each node's list starts in `order`.
 // A query re-tests the path from the root and re-walks only from the first test whose side
 // changed, keeping the order before it.
+// Lists from the first one holding a detail object on are walked again for every eye (an
+// object's order depends on the eye).
 struct PfdCursor {
   std::vector<uint32_t> path;        // node indices, root first
   std::vector<uint32_t> order_size;  // order.size() before each path node's list
+  uint32_t fixed = 0;                // path[0, fixed) hold no object
   const PfdTree* tree = nullptr;
 };
 PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdCursor& cursor,
@@ -309,6 +355,8 @@ struct PfdLevelOptions {
   uint64_t cell_memory = 64ull << 20;
   uint32_t max_cell_depth = 8;
   uint64_t max_memory = 1ull << 30;  // all trees of all levels together; exceeded: PfdBudgetError
+  // tree.object_extent = object_extent × the eye height when > 0 (else tree.object_extent as set).
+  double object_extent = 1.0;
 };
 
 struct PfdLevel {

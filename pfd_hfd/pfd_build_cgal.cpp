@@ -402,9 +402,12 @@ struct RefFrame {
 
 class Builder {
  public:
-  Builder(const BspTree& bsp, double height, const PfdOptions& options, const Region& root, PfdTree& out)
-      : bsp_(bsp), options_(options), out_(out), height_(height) {
+  Builder(const BspTree& bsp, double height, const PfdOptions& options, const Region& root,
+          const std::vector<uint8_t>& objects, PfdTree& out)
+      : bsp_(bsp), options_(options), out_(out), height_(height), object_(objects) {
     const size_t nn = bsp.nodes.size();
+    if (bsp.fragments.size() >= kObjectMark) throw PfdBudgetError("pfd: more than 2^31 fragments");
+    object_of_.assign(nn, UINT32_MAX);
     lines_.reserve(nn);
     for (const BspNode& node : bsp.nodes) lines_.push_back(planeLine(node.plane, height));
     frag_line_.assign(bsp.fragments.size(), UINT32_MAX);
@@ -456,8 +459,10 @@ class Builder {
     // Every line is classified against the whole region once: a line that does not cross it has
     // the same side in every sub-region, for good (never logged, never undone). Only the others
     // ("varying") are ever classified again, so the work per node follows them, not N.
+    // The lines inside detail objects are never tested (nor varying): the query orders an object.
     varying_.assign(lines_.size(), 0);
     for (uint32_t id = 0; id < lines_.size(); ++id) {
+      if (id < nn && object_[id] != 0) continue;
       const int s = classifyRegion(lines_[id], root, counters);
       if (s == kCross) {
         varying_[id] = 1;
@@ -625,6 +630,10 @@ class Builder {
         emitFragments(node, item.emit_side == kEmitOn ? 0 : item.emit_side, r, out);
         continue;
       }
+      if (object_[item.node] == 1) {
+        out.push_back(kObjectMark | static_cast<uint32_t>(item.node));  // a detail object, whole
+        continue;
+      }
       const int s = side(static_cast<uint32_t>(item.node), r);
       int32_t far_child, near_child;
       children(node, s, far_child, near_child);
@@ -695,13 +704,19 @@ class Builder {
 
   uint32_t refLength(uint32_t ref) const {
     if (ref == kEmptyRun) return 0;
-    return ref & kPfdSeqBit ? out_.seqs[ref & ~kPfdSeqBit].length : out_.runs[ref].count;
+    if (ref & kPfdSeqBit) return out_.seqs[ref & ~kPfdSeqBit].length;
+    if (ref & kPfdObjectBit) return out_.objects[ref & ~kPfdObjectBit].fragments;
+    return out_.runs[ref].count;
   }
   uint32_t refDepth(uint32_t ref) const { return ref & kPfdSeqBit ? seq_depth_[ref & ~kPfdSeqBit] : 0; }
 
   // Appends the ids `ref` expands to (sequences nest at most kPfdMaxSeqDepth deep).
   void expandRef(uint32_t ref, std::vector<uint32_t>& out) const {
     if (ref == kEmptyRun) return;
+    if (!(ref & kPfdSeqBit) && (ref & kPfdObjectBit)) {
+      out.push_back(kObjectMark | static_cast<uint32_t>(object_root_[ref & ~kPfdObjectBit]));
+      return;
+    }
     if (!(ref & kPfdSeqBit)) {
       const PfdRun& run = out_.runs[ref];
       out.insert(out.end(), out_.fragment_ids.begin() + run.first, out_.fragment_ids.begin() + run.first + run.count);
@@ -749,7 +764,7 @@ class Builder {
           // sequence: flat.
           scratch_.clear();
           emitSubtree(f.node, r, scratch_);
-          result = scratch_.empty() ? kEmptyRun : findOrAddRun(scratch_);
+          result = scratch_.empty() ? kEmptyRun : findOrAddRef(scratch_);
         } else {
           f.s = side(static_cast<uint32_t>(f.node), r);
           children(node, f.s, f.far_child, f.near_child);
@@ -809,7 +824,7 @@ class Builder {
       flat_.insert(flat_.end(), own_.begin(), own_.end());
       flat_.insert(flat_.end(), small_near_.begin(), small_near_.end());
       expandRef(near_ref, flat_);
-      return findOrAddRun(flat_);
+      return findOrAddRef(flat_);
     }
     items_.clear();
     acc_.clear();
@@ -817,12 +832,12 @@ class Builder {
     // A sequence already at the depth limit is inlined (its items referenced instead).
     auto flush = [&] {
       if (acc_.empty()) return;
-      items_.push_back(findOrAddRun(acc_));
+      appendRefs(acc_, items_);
       acc_.clear();
     };
     auto part = [&](uint32_t ref) {
       if (ref == kEmptyRun) return;
-      if (!(ref & kPfdSeqBit) && out_.runs[ref].count < options_.share_min) {
+      if (!(ref & (kPfdSeqBit | kPfdObjectBit)) && out_.runs[ref].count < options_.share_min) {
         expandRef(ref, acc_);
         return;
       }
@@ -856,7 +871,7 @@ class Builder {
         return it->second | kPfdSeqBit;
     }
     const uint32_t id = static_cast<uint32_t>(out_.seqs.size());
-    if (id >= kPfdSeqBit) throw PfdBudgetError("pfd: more than 2^31 sequences");
+    if (id >= kPfdObjectBit) throw PfdBudgetError("pfd: more than 2^30 sequences");
     uint32_t depth = 0;
     for (uint32_t item : items) depth = std::max(depth, refDepth(item));
     out_.seqs.push_back({static_cast<uint32_t>(out_.seq_items.size()), static_cast<uint32_t>(items.size()), length});
@@ -978,8 +993,102 @@ class Builder {
     return run_id;
   }
 
-  // Appends a list entry for `ids` (HFD: its visible fragments), deduplicated when asked.
+  // Appends list entries for `ids` (fragments and object marks; HFD: the visible ones),
+  // deduplicated when asked.
   void addRun(std::span<const uint32_t> ids, const Region& r) {
+    for (size_t b = 0; b < ids.size();) {
+      if (ids[b] & kObjectMark) {
+        addObject(static_cast<int32_t>(ids[b] & ~kObjectMark), r);
+        ++b;
+        continue;
+      }
+      size_t e = b;
+      while (e < ids.size() && !(ids[e] & kObjectMark)) ++e;
+      addFragments(ids.subspan(b, e - b), r);
+      b = e;
+    }
+  }
+
+  // A list entry for the detail object rooted at BSP node `root` (HFD: unless all its fragments
+  // are hidden from r).
+  void addObject(int32_t root, const Region& r) {
+    const auto [fb, fe] = frag_range_[root];
+    if (hfd() && allHidden(std::span<const uint32_t>(frag_pre_.data() + fb, fe - fb), r)) return;
+    const uint32_t ref = objectRef(root);
+    list_fragments += refLength(ref);
+    out_.run_refs.push_back(ref);
+  }
+
+  // The object entry for the subtree at `root`, made on first use: its nodes in preorder with the
+  // BSP node's plane and its fragments by facing as two runs.
+  uint32_t objectRef(int32_t root) {
+    if (object_of_[root] != UINT32_MAX) return object_of_[root] | kPfdObjectBit;
+    const uint32_t index = static_cast<uint32_t>(out_.objects.size());
+    if (index >= kPfdObjectBit) throw PfdBudgetError("pfd: more than 2^30 objects");
+    PfdObject object;
+    object.root = static_cast<uint32_t>(out_.object_nodes.size());
+    struct Pending {
+      int32_t bsp_node, parent;
+      bool front;
+    };
+    std::vector<Pending> dfs{{root, -1, false}};
+    std::vector<uint32_t> facing;
+    while (!dfs.empty()) {
+      const Pending p = dfs.back();
+      dfs.pop_back();
+      const BspNode& node = bsp_.nodes[p.bsp_node];
+      const int32_t me = static_cast<int32_t>(out_.object_nodes.size());
+      PfdObjectNode on;
+      on.plane = testPlaneIndex(static_cast<uint32_t>(p.bsp_node));
+      on.parent = p.parent;
+      for (const int8_t o : {int8_t{1}, int8_t{-1}}) {
+        facing.clear();
+        for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f)
+          if (bsp_.fragment_orientation[f] == o) facing.push_back(f);
+        (o > 0 ? on.front_run : on.back_run) = facing.empty() ? kPfdNoRun : findOrAddRun(facing);
+      }
+      object.fragments += node.fragment_count;
+      out_.object_nodes.push_back(on);
+      if (p.parent >= 0) (p.front ? out_.object_nodes[p.parent].front : out_.object_nodes[p.parent].back) = me;
+      if (node.back >= 0) dfs.push_back({node.back, me, false});
+      if (node.front >= 0) dfs.push_back({node.front, me, true});
+    }
+    object.nodes = static_cast<uint32_t>(out_.object_nodes.size()) - object.root;
+    out_.objects.push_back(object);
+    object_root_.push_back(root);
+    object_of_[root] = index;
+    return index | kPfdObjectBit;
+  }
+
+  // The references `ids` (fragments and object marks) make, appended to `items`: a run per stretch
+  // of fragments, an object entry per mark.
+  void appendRefs(const std::vector<uint32_t>& ids, std::vector<uint32_t>& items) {
+    for (size_t b = 0; b < ids.size();) {
+      if (ids[b] & kObjectMark) {
+        items.push_back(objectRef(static_cast<int32_t>(ids[b] & ~kObjectMark)));
+        ++b;
+        continue;
+      }
+      size_t e = b;
+      while (e < ids.size() && !(ids[e] & kObjectMark)) ++e;
+      plain_.assign(ids.begin() + static_cast<std::ptrdiff_t>(b), ids.begin() + static_cast<std::ptrdiff_t>(e));
+      items.push_back(findOrAddRun(plain_));
+      b = e;
+    }
+  }
+
+  // One reference for `ids` (fragments and object marks): a run, an object, or a sequence of them.
+  uint32_t findOrAddRef(const std::vector<uint32_t>& ids) {
+    ref_items_.clear();
+    appendRefs(ids, ref_items_);
+    if (ref_items_.size() == 1) return ref_items_[0];
+    uint64_t length = 0;
+    for (uint32_t x : ref_items_) length += refLength(x);
+    const std::vector<uint32_t> items = ref_items_;  // findOrAddSeq may not alias the scratch
+    return findOrAddSeq(items, static_cast<uint32_t>(length));
+  }
+
+  void addFragments(std::span<const uint32_t> ids, const Region& r) {
     if (ids.empty()) return;
     std::vector<uint32_t>& v = run_scratch_;
     v.clear();
@@ -1001,6 +1110,7 @@ class Builder {
 
   uint32_t newRun(const std::vector<uint32_t>& ids) {
     const uint32_t id = static_cast<uint32_t>(out_.runs.size());
+    if (id >= kPfdObjectBit) throw PfdBudgetError("pfd: more than 2^30 runs");
     out_.runs.push_back({static_cast<uint32_t>(out_.fragment_ids.size()), static_cast<uint32_t>(ids.size())});
     out_.fragment_ids.insert(out_.fragment_ids.end(), ids.begin(), ids.end());
     return id;
@@ -1015,7 +1125,8 @@ class Builder {
            out_.fragment_ids.size() * sizeof(uint32_t) + out_.planes.size() * sizeof(Plane) +
            memo_entries_.size() * (sizeof(MemoEntry) + 48) + key_pool_.size() * sizeof(uint64_t) +
            memo_pool_.size() * sizeof(uint32_t) + out_.seqs.size() * (sizeof(PfdSeq) + 1 + 48) +
-           out_.seq_items.size() * sizeof(uint32_t);
+           out_.seq_items.size() * sizeof(uint32_t) + out_.objects.size() * sizeof(PfdObject) +
+           out_.object_nodes.size() * sizeof(PfdObjectNode);
   }
 
  private:
@@ -1337,6 +1448,11 @@ class Builder {
     while (!stack.empty()) {
       const Item item = stack.back();
       const BspNode& node = bsp_.nodes[item.node];
+      if (item.emit_side == 0 && object_[item.node] == 1) {
+        stack.pop_back();
+        addObject(item.node, r);
+        continue;
+      }
       if (item.emit_side == 0) {
         const int s = side(static_cast<uint32_t>(item.node), r);
         if (s == kCross) {
@@ -1486,6 +1602,14 @@ class Builder {
   std::vector<uint8_t> seq_depth_;  // per sequence: 1 + the deepest item's depth (a run: 0)
   std::vector<uint32_t> own_, flat_, acc_, items_, small_far_, small_near_;
   std::vector<RefFrame> ref_frames_;
+  // Detail objects (PfdOptions::object_extent): per BSP node 1 at an object's root, 2 inside;
+  // per node the object made for it; per object its BSP root. In id lists an object is the mark
+  // kObjectMark | its BSP root (fragment ids stay below it).
+  static constexpr uint32_t kObjectMark = 0x80000000u;
+  const std::vector<uint8_t>& object_;
+  std::vector<uint32_t> object_of_;
+  std::vector<int32_t> object_root_;
+  std::vector<uint32_t> plain_, ref_items_;
   std::vector<std::vector<glm::dvec2>> rings_;
   uint32_t rings_stamp_ = 0;
   uint32_t region_id_ = 0, region_counter_ = 0;
@@ -1544,11 +1668,13 @@ Region makeRegion(std::span<const std::vector<glm::dvec2>> walkable, const std::
 // the other side, exactly (so the line then touches it); eyes closer than tol to a wall's plane
 // leave W. tol = 1e-9 × the region's extent: far above the rounding (a few ulps of the
 // coordinates, ~1e-16 relative) and far below any distance an eye keeps from a wall.
-void trimSlivers(Region& region, const BspTree& bsp, double height, Counters& counters) {
+void trimSlivers(Region& region, const BspTree& bsp, double height, const std::vector<uint8_t>& objects,
+                 Counters& counters) {
   const double tol = kSliverTolerance * regionExtent(region);
   Region front, back;
-  for (const BspNode& node : bsp.nodes) {
-    const Line l = planeLine(node.plane, height);
+  for (size_t i = 0; i < bsp.nodes.size(); ++i) {
+    if (objects[i] != 0) continue;  // never a test-line
+    const Line l = planeLine(bsp.nodes[i].plane, height);
     if (l.constant) continue;
     const double reach = sliverReach(l, tol);
     for (Piece& p : region) {
@@ -1581,15 +1707,17 @@ const char* treeKindName(TreeKind kind) {
 }
 
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                           const std::optional<PfdBox>& cell) {
+                           const std::optional<PfdBox>& cell, double object_extent) {
   if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
   Counters counters;
   const Region region = makeRegion(walkable, cell, counters);
   PfdLineCount count;
   for (const Piece& p : region) count.area += pieceArea(p);
   if (region.empty()) return count;
-  for (const BspNode& node : bsp.nodes)
-    if (classifyRegion(planeLine(node.plane, height), region, counters) == kCross) ++count.crossing;
+  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, object_extent);
+  for (size_t i = 0; i < bsp.nodes.size(); ++i)
+    if (objects[i] == 0 && classifyRegion(planeLine(bsp.nodes[i].plane, height), region, counters) == kCross)
+      ++count.crossing;
   return count;
 }
 
@@ -1603,7 +1731,8 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
 
   Counters counters;
   Region region = makeRegion(walkable, cell, counters);
-  if (options.trim_slivers) trimSlivers(region, bsp, height, counters);
+  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, options.drop_back_faces ? options.object_extent : 0.0);
+  if (options.trim_slivers) trimSlivers(region, bsp, height, objects, counters);
   for (const Piece& p : region) {
     std::vector<glm::dvec2> ring;
     for (const Corner& k : p.corners) ring.emplace_back(k.ax, k.az);
@@ -1611,7 +1740,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
     tree.stats.region_area += pieceArea(p);
   }
 
-  Builder builder(bsp, height, options, region, tree);
+  Builder builder(bsp, height, options, region, objects, tree);
   if (!region.empty()) builder.run(std::move(region));
   else tree.nodes.push_back({});
 
@@ -1626,7 +1755,16 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.runs = tree.runs.size();
   s.seqs = tree.seqs.size();
   s.seq_items = tree.seq_items.size();
-  s.test_planes = tree.planes.size();
+  {
+    std::vector<uint32_t> tested;
+    for (const PfdNode& n : tree.nodes)
+      if (n.front >= 0) tested.push_back(n.plane);
+    std::sort(tested.begin(), tested.end());
+    s.test_planes = static_cast<uint64_t>(std::unique(tested.begin(), tested.end()) - tested.begin());
+  }
+  s.objects = tree.objects.size();
+  s.object_nodes = tree.object_nodes.size();
+  for (const PfdObject& o : tree.objects) s.object_fragments += o.fragments;
   s.exact_fallbacks = counters.exact_fallbacks + builder.counters.exact_fallbacks;
   s.touching = builder.counters.touching;
   s.decisions = builder.counters.decisions;
@@ -1671,6 +1809,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   tree.fragment_ids.shrink_to_fit();
   tree.seqs.shrink_to_fit();
   tree.seq_items.shrink_to_fit();
+  tree.object_nodes.shrink_to_fit();
   s.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   measurePfd(tree, options.stat_eyes, options.seed);
   return tree;

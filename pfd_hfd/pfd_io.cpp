@@ -9,8 +9,10 @@
 //             f64 height, u8 has_cell, 4 f64 cell box, u32 pieces (u32 corners, 2 f64 each),
 //             u32 planes (4 f64), u32 nodes (u32 plane, i32 front, i32 back, u32 first_ref, u32 ref_count),
 //             u32 run_refs (u32), u32 runs (2 u32), u32 fragment_ids (u32), u32 seqs (3 u32),
-//             u32 seq_items (u32), stats (18 u64, 5 f64). A run reference with the top bit set
-//             (kPfdSeqBit) names a sequence.
+//             u32 seq_items (u32), u32 objects (3 u32), u32 object_nodes (u32 plane, i32 front,
+//             i32 back, i32 parent, u32 front_run, u32 back_run), stats (21 u64, 5 f64). A run
+//             reference with the top bit set (kPfdSeqBit) names a sequence, with the next
+//             (kPfdObjectBit) a detail object.
 // Loading checks everything a query relies on: children after their parent, plane, run and
 // fragment indices in range, so that a loaded tree is queried without further checks.
 #include <algorithm>
@@ -30,7 +32,8 @@ namespace {
 constexpr char kMagic[8] = {'W', 'V', 'P', 'F', 'D', '\r', '\n', '\x1a'};
 // 2: tree kind and visibility sampling after eye_height; HFD counters in the stats.
 // 3: sequences (orders stored as references to sub-orders) after the fragment ids.
-constexpr uint32_t kVersion = 3;
+// 4: detail objects after the sequences; their counts in the stats.
+constexpr uint32_t kVersion = 4;
 constexpr size_t kHeaderBytes = 32;
 
 using Writer = ByteWriter;
@@ -105,10 +108,25 @@ void writeTree(Writer& w, const PfdTree& t) {
   }
   w.put(static_cast<uint32_t>(t.seq_items.size()));
   for (uint32_t x : t.seq_items) w.put(x);
+  w.put(static_cast<uint32_t>(t.objects.size()));
+  for (const PfdObject& o : t.objects) {
+    w.put(o.root);
+    w.put(o.nodes);
+    w.put(o.fragments);
+  }
+  w.put(static_cast<uint32_t>(t.object_nodes.size()));
+  for (const PfdObjectNode& n : t.object_nodes) {
+    w.put(n.plane);
+    w.put(n.front);
+    w.put(n.back);
+    w.put(n.parent);
+    w.put(n.front_run);
+    w.put(n.back_run);
+  }
   const PfdStats& s = t.stats;
   for (uint64_t v : {s.fragments, s.nodes, s.leaves, s.depth_max, s.list_entries, s.list_fragments, s.pool_entries,
                      s.runs, s.seqs, s.seq_items, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max, s.visibility_tests,
-                     s.visibility_rays, s.hidden_rejected})
+                     s.visibility_rays, s.hidden_rejected, s.objects, s.object_nodes, s.object_fragments})
     w.put(v);
   for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, s.tests_huffman_bound}) w.put(v);
 }
@@ -174,10 +192,28 @@ PfdTree readTree(Reader& r, size_t fragments) {
   const uint32_t items = r.count(4);
   t.seq_items.resize(items);
   for (uint32_t& x : t.seq_items) x = r.get<uint32_t>();
+  const uint32_t objects = r.count(12);
+  t.objects.resize(objects);
+  for (PfdObject& o : t.objects) {
+    o.root = r.get<uint32_t>();
+    o.nodes = r.get<uint32_t>();
+    o.fragments = r.get<uint32_t>();
+  }
+  const uint32_t object_nodes = r.count(24);
+  t.object_nodes.resize(object_nodes);
+  for (PfdObjectNode& n : t.object_nodes) {
+    n.plane = r.get<uint32_t>();
+    n.front = r.get<int32_t>();
+    n.back = r.get<int32_t>();
+    n.parent = r.get<int32_t>();
+    n.front_run = r.get<uint32_t>();
+    n.back_run = r.get<uint32_t>();
+  }
   PfdStats& s = t.stats;
   for (uint64_t* v : {&s.fragments, &s.nodes, &s.leaves, &s.depth_max, &s.list_entries, &s.list_fragments,
                       &s.pool_entries, &s.runs, &s.seqs, &s.seq_items, &s.test_planes, &s.exact_fallbacks, &s.touching, &s.decisions,
-                      &s.tests_max, &s.visibility_tests, &s.visibility_rays, &s.hidden_rejected})
+                      &s.tests_max, &s.visibility_tests, &s.visibility_rays, &s.hidden_rejected, &s.objects,
+                      &s.object_nodes, &s.object_fragments})
     *v = r.get<uint64_t>();
   // The last slot was written as 0 before tests_huffman_bound had it (same format version): 0 then
   // reads as "not computed".
@@ -199,10 +235,42 @@ PfdTree readTree(Reader& r, size_t fragments) {
     if (static_cast<uint64_t>(n.first_ref) + n.ref_count > refs)
       r.fail("PFD node " + std::to_string(i) + " has a list out of range");
   }
-  // A reference names a run, or a sequence; a sequence only refers to sequences before it (so
-  // none contains itself), nests at most kPfdMaxSeqDepth deep and expands to its stated length.
+  // An object is a tree of its own nodes: children after their parent and linked back to it, so
+  // that the query's walk by parent links ends; its runs exist and hold its stated fragments.
+  auto runCount = [&](uint32_t run) -> uint64_t { return run == kPfdNoRun ? 0 : t.runs[run].count; };
+  for (uint32_t i = 0; i < objects; ++i) {
+    const PfdObject& o = t.objects[i];
+    const std::string what = "PFD object " + std::to_string(i);
+    if (o.nodes == 0 || static_cast<uint64_t>(o.root) + o.nodes > object_nodes) r.fail(what + " out of range");
+    uint64_t fragments_in = 0;
+    for (uint32_t k = o.root; k < o.root + o.nodes; ++k) {
+      const PfdObjectNode& n = t.object_nodes[k];
+      if (n.plane >= planes) r.fail(what + " has a plane out of range");
+      if ((n.front_run != kPfdNoRun && n.front_run >= runs) || (n.back_run != kPfdNoRun && n.back_run >= runs))
+        r.fail(what + " has a run out of range");
+      for (const int32_t c : {n.front, n.back}) {
+        if (c == -1) continue;
+        if (c < 0 || static_cast<uint32_t>(c) <= k || static_cast<uint32_t>(c) >= o.root + o.nodes ||
+            t.object_nodes[c].parent != static_cast<int32_t>(k))
+          r.fail(what + " has a child out of range");
+      }
+      if (n.front != -1 && n.front == n.back) r.fail(what + " has a child twice");
+      if (k == o.root ? n.parent != -1
+                      : (n.parent < static_cast<int32_t>(o.root) || static_cast<uint32_t>(n.parent) >= k ||
+                         (t.object_nodes[n.parent].front != static_cast<int32_t>(k) &&
+                          t.object_nodes[n.parent].back != static_cast<int32_t>(k))))
+        r.fail(what + " has a parent out of range");
+      fragments_in += runCount(n.front_run) + runCount(n.back_run);
+    }
+    if (fragments_in != o.fragments) r.fail(what + " has a wrong fragment count");
+  }
+  // A reference names a run, an object or a sequence; a sequence only refers to sequences before
+  // it (so none contains itself), nests at most kPfdMaxSeqDepth deep and expands to its stated
+  // length.
   auto refOk = [&](uint32_t x, uint32_t seq_limit) {
-    return x & kPfdSeqBit ? (x & ~kPfdSeqBit) < seq_limit : x < runs;
+    if (x & kPfdSeqBit) return (x & ~kPfdSeqBit) < seq_limit;
+    if (x & kPfdObjectBit) return (x & ~kPfdObjectBit) < objects;
+    return x < runs;
   };
   for (uint32_t x : t.run_refs)
     if (!refOk(x, seqs)) r.fail("PFD run reference out of range");
@@ -218,6 +286,8 @@ PfdTree readTree(Reader& r, size_t fragments) {
       if (x & kPfdSeqBit) {
         length += t.seqs[x & ~kPfdSeqBit].length;
         d = std::max<uint32_t>(d, depth[x & ~kPfdSeqBit]);
+      } else if (x & kPfdObjectBit) {
+        length += t.objects[x & ~kPfdObjectBit].fragments;
       } else {
         length += x < runs ? t.runs[x].count : 0;
       }

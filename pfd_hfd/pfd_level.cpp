@@ -75,6 +75,9 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     q.push_back({PfdBox{{mx, mz}, {b.hi.x, b.hi.y}}, c.depth + 1});
   };
   const double per_line2 = kBytesPerLineSquared / (options.tree.visibility ? kHfdShrink : 1.0);
+  PfdOptions tree_options = options.tree;
+  if (options.object_extent > 0.0) tree_options.object_extent = options.object_extent * eye_height;
+  if (!tree_options.drop_back_faces) tree_options.object_extent = 0.0;
 
   // Plan: depth first, so that the cells keep a fixed quadrant order.
   std::vector<PlannedCell> planned;
@@ -83,7 +86,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     while (!stack.empty()) {
       const PlannedCell c = stack.back();
       stack.pop_back();
-      const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box);
+      const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box, tree_options.object_extent);
       if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
       const double estimate = per_line2 * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
       if (options.cell_memory != 0 && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
@@ -112,7 +115,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
       const uint64_t remaining = options.max_memory == 0 ? 0
                                  : now >= options.max_memory ? 1
                                                              : options.max_memory - now;
-      PfdOptions o = options.tree;
+      PfdOptions o = tree_options;
       o.max_memory = options.cell_memory;
       if (remaining != 0 && (o.max_memory == 0 || remaining < o.max_memory)) {
         o.max_memory = remaining;
@@ -148,7 +151,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
                              std::to_string(planned[i].depth) + " subdivisions; raise --cell-memory or --max-memory");
       say(where + ": a cell went over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
       for (const PlannedCell& c : q)
-        if (countPfdLines(bsp, level.walkable, out.height, c.box).area > 0.0) again.push_back(c);
+        if (countPfdLines(bsp, level.walkable, out.height, c.box, tree_options.object_extent).area > 0.0) again.push_back(c);
     }
     planned = std::move(again);
   }

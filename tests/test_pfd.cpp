@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -117,7 +118,7 @@ CheckResult checkTree(const BspTree& bsp, const PfdTree& tree, uint32_t eyes, ui
     EXPECT_EQ(qr.tests, q.tests);
     EXPECT_LE(lists.size(), q.tests + 1);
     pfdQueryRunIds(tree, eye, run_ids);
-    pfdExpandRefs(tree, lists, from_refs);
+    pfdExpandRefs(tree, lists, eye, from_refs);
     EXPECT_EQ(from_refs, run_ids);
     if (q.on_line || onSomeVerticalPlane(bsp, eye)) {
       ++r.skipped;
@@ -149,7 +150,10 @@ void checkStructure(const BspTree& bsp, const PfdTree& tree) {
       ASSERT_LT(n.plane, tree.planes.size());
     }
   }
-  for (const Plane& p : tree.planes) EXPECT_TRUE(p.n.x != 0.0 || p.n.z != 0.0) << "a horizontal plane is tested";
+  for (const PfdNode& n : tree.nodes) {
+    if (n.front < 0) continue;
+    EXPECT_TRUE(tree.planes[n.plane].n.x != 0.0 || tree.planes[n.plane].n.z != 0.0) << "a horizontal plane is tested";
+  }
   EXPECT_LE(tree.stats.test_planes, bsp.nodes.size() + bsp.fragments.size());
   EXPECT_LE(tree.stats.tests_max, tree.stats.depth_max);
   EXPECT_LE(tree.stats.tests_max, bsp.nodes.size() + bsp.fragments.size());
@@ -744,6 +748,135 @@ TEST(Pfd, SequencesShareSubOrders) {
     std::filesystem::remove(path);
   }
   EXPECT_TRUE(any_seqs);
+}
+
+// Detail objects (PfdOptions::object_extent): small BSP subtrees listed whole and ordered by the
+// query's walk of their own planes. For every extent, from none to the whole tree in one object,
+// the order is exactly backToFront's (plain, coherent and run queries alike), the trees test fewer
+// lines, and the order within one leaf does change with the eye, so the check is not vacuous
+// (without objects two eyes with the same lists have the same order).
+TEST(Pfd, ObjectsMatchBspOrder) {
+  const Scene scene = loadScene("gen:office?rooms=6&floors=1&furniture=6&seed=5");
+  const FloorLevel& level = scene.levels[0];
+  const double height = level.floor_y + scene.eye_height;
+  uint64_t reordered_total = 0, multi_node_objects = 0;
+  // Without and with detail groups in the BSP (BspOptions::detail_extent keeps each furniture box
+  // in a subtree of its own, so objects are whole boxes, not single faces).
+  for (const double detail : {0.0, 2.0}) {
+    BspOptions bsp_options;
+    bsp_options.detail_extent = detail;
+    const BspTree bsp = buildBsp(scene, bsp_options);
+    PfdOptions options;
+    options.stat_eyes = 500;
+    const PfdTree plain = buildPfd(bsp, level.walkable, height, std::nullopt, options);
+    EXPECT_EQ(plain.objects.size(), 0u);
+    for (const double extent : {1.0, 1e9}) {
+      SCOPED_TRACE("detail " + std::to_string(detail) + ", object extent " + std::to_string(extent) +
+                   " x eye height");
+      options.object_extent = extent * scene.eye_height;
+      const PfdTree tree = buildPfd(bsp, level.walkable, height, std::nullopt, options);
+      EXPECT_GT(tree.stats.objects, 0u);
+      EXPECT_EQ(tree.stats.objects, tree.objects.size());
+      EXPECT_LT(tree.stats.nodes, plain.stats.nodes);
+      for (const PfdObject& o : tree.objects) multi_node_objects += o.nodes > 1;
+      checkStructure(bsp, tree);
+      const CheckResult r = checkTree(bsp, tree, 2000, 7);
+      EXPECT_EQ(r.mismatches, 0u);
+      EXPECT_GE(r.eyes, 1800u);
+      uint64_t object_tests = 0;
+      uint64_t state = 17;
+      std::vector<PfdRefRange> la, lb;
+      std::vector<uint32_t> oa, ob;
+      for (int i = 0; i < 2000; ++i) {
+        const glm::dvec2 p = samplePfdRegion(tree, state), q = samplePfdRegion(tree, state);
+        const glm::dvec3 a{p.x, height, p.y}, b{p.x + 0.05 * (q.x - p.x), height, p.y + 0.05 * (q.y - p.y)};
+        pfdQueryRefs(tree, a, la);
+        pfdQueryRefs(tree, b, lb);
+        object_tests += pfdQuery(tree, a, oa).object_tests;
+        pfdQuery(tree, b, ob);
+        const bool same = la.size() == lb.size() &&
+                          std::equal(la.begin(), la.end(), lb.begin(), [](const PfdRefRange& x, const PfdRefRange& y) {
+                            return x.first == y.first && x.count == y.count;
+                          });
+        reordered_total += same && oa != ob;
+      }
+      EXPECT_GT(object_tests, 0u);
+    }
+  }
+  EXPECT_GT(multi_node_objects, 0u);
+  EXPECT_GT(reordered_total, 0u);
+}
+
+// HFD with detail objects: each list is a subsequence of the PFD order (an object is dropped only
+// when all its fragments are hidden from the region), the tree holds objects, and it survives the
+// tree file; a corrupt object (a child that is not below its node, a wrong fragment count) is a
+// load error.
+TEST(Pfd, HfdObjectsAreSubsequenceAndLoadChecked) {
+  const Scene scene = loadScene("gen:office?rooms=6&floors=1&furniture=6&seed=5");
+  BspOptions bsp_options;
+  bsp_options.detail_extent = 2.0;
+  const BspTree bsp = buildBsp(scene, bsp_options);
+  const VisibilityScene vis = VisibilityScene::build(bsp);
+  const FloorLevel& level = scene.levels[0];
+  const double height = level.floor_y + scene.eye_height;
+  PfdOptions options;
+  options.stat_eyes = 0;
+  options.object_extent = scene.eye_height;
+  const PfdTree pfd_tree = buildPfd(bsp, level.walkable, height, std::nullopt, options);
+  options.visibility = &vis;
+  const PfdTree hfd_tree = buildPfd(bsp, level.walkable, height, std::nullopt, options);
+  ASSERT_GT(hfd_tree.stats.objects, 0u);
+  EXPECT_LT(hfd_tree.stats.list_fragments, pfd_tree.stats.list_fragments);
+  std::vector<uint32_t> a, b;
+  uint64_t state = 5;
+  for (int i = 0; i < 1000; ++i) {
+    const glm::dvec2 p = samplePfdRegion(pfd_tree, state);
+    const glm::dvec3 eye{p.x, height, p.y};
+    pfdQuery(pfd_tree, eye, a);
+    pfdQuery(hfd_tree, eye, b);
+    size_t k = 0;
+    for (uint32_t f : a)
+      if (k < b.size() && b[k] == f) ++k;
+    ASSERT_EQ(k, b.size()) << "HFD list is not a subsequence of the PFD order";
+  }
+  TreeFile file;
+  file.bsp = bsp;
+  file.eye_height = scene.eye_height;
+  file.kind = TreeKind::kHfd;
+  file.levels.push_back({});
+  file.levels[0].cells.push_back(hfd_tree);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_obj_" + std::to_string(::getpid()) + ".wvt")).string();
+  saveTreeFile(file, path);
+  const TreeFile back = loadTreeFile(path);
+  const PfdTree& t = back.levels[0].cells[0];
+  ASSERT_EQ(t.objects.size(), hfd_tree.objects.size());
+  EXPECT_EQ(t.stats.objects, hfd_tree.stats.objects);
+  state = 6;
+  for (int i = 0; i < 300; ++i) {
+    const glm::dvec2 p = samplePfdRegion(t, state);
+    pfdQuery(hfd_tree, {p.x, height, p.y}, a);
+    pfdQuery(t, {p.x, height, p.y}, b);
+    ASSERT_EQ(a, b);
+  }
+  PfdTree& bad = file.levels[0].cells[0];
+  uint32_t with_child = UINT32_MAX;
+  for (uint32_t k = 0; k < bad.object_nodes.size() && with_child == UINT32_MAX; ++k)
+    if (bad.object_nodes[k].back >= 0) with_child = k;
+  ASSERT_NE(with_child, UINT32_MAX);
+  const int32_t child = bad.object_nodes[with_child].back;
+  bad.object_nodes[with_child].back = static_cast<int32_t>(with_child);  // a loop
+  saveTreeFile(file, path);
+  EXPECT_THROW(loadTreeFile(path), SceneError);
+  bad.object_nodes[with_child].back = child;
+  bad.objects[0].fragments += 1;
+  saveTreeFile(file, path);
+  EXPECT_THROW(loadTreeFile(path), SceneError);
+  bad.objects[0].fragments -= 1;
+  bad.run_refs.push_back(static_cast<uint32_t>(bad.objects.size()) | kPfdObjectBit);
+  saveTreeFile(file, path);
+  EXPECT_THROW(loadTreeFile(path), SceneError);
+  std::filesystem::remove(path);
 }
 
 // On an office the sequences store fewer ids than flat runs do (the point of them).

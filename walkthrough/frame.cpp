@@ -178,7 +178,8 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
         const glm::dvec3 eye(camera.eye.x, pl.height, camera.eye.z);
         if (const PfdTree* tree = findPfdCell(pl, eye); tree && !tree->nodes.empty()) {
           // Run indices, not runs: the list cullers are per run.
-          stats.tests = pfdQueryRunIds(*tree, eye, run_indices_).tests;
+          const PfdQueryResult q = pfdQueryRunIds(*tree, eye, run_indices_);
+          stats.tests = q.tests + q.object_tests;
           const ListCuller* culler = nullptr;
           if (*level < world.run_cullers.size()) {
             const size_t cell = static_cast<size_t>(tree - pl.cells.data());

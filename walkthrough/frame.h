@@ -75,7 +75,7 @@ struct FrameStats {
   uint32_t listed = 0;          // from the order source, before culling
   uint32_t culled = 0;          // by the backface method
   uint32_t drawn = 0;           // listed - culled
-  uint32_t tests = 0;           // plane tests (PFD/HFD path: tree tests; BSP: nodes visited)
+  uint32_t tests = 0;           // plane tests (PFD/HFD: the path's and the detail objects'; BSP: nodes visited)
   double order_ms = 0.0;        // query + culling
   double draw_ms = 0.0;         // filled by the drawer's caller
   double object_ms = 0.0;       // subdividing the mesh objects (not in order_ms)

@@ -27,6 +27,7 @@ struct BuildArgs {
   std::string max_memory = "1G";
   std::string cell_memory = "64M";
   std::string heuristic = "balanced";
+  double object_extent = PfdLevelOptions{}.object_extent;
   std::string samples;  // hfd: R,P,REFINE
   std::vector<uint32_t> levels;  // only these level indices; empty: all
   uint64_t visibility_seed = 1;
@@ -108,6 +109,7 @@ struct QueryTiming {
   double pfd_ns = 0.0, runs_ns = 0.0, refs_ns = 0.0, bsp_ns = 0.0;
   double runs_mean = 0.0;  // runs per query
   double refs_mean = 0.0;  // ranges of run_refs per query (pfdQueryRefs)
+  double object_tests_mean = 0.0;  // plane tests inside detail objects per query
 };
 
 // Mean wall time of one query at random eyes of the tree's region: the PFD walk against the BSP
@@ -137,6 +139,9 @@ QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) 
   };
   double ids_mean = 0.0;
   timeEach([&](const glm::dvec3& e) { pfdQuery(tree, e, order); return order.size(); }, t.pfd_ns, ids_mean);
+  uint64_t object_tests = 0;
+  for (const glm::dvec3& e : points) object_tests += pfdQuery(tree, e, order).object_tests;
+  t.object_tests_mean = static_cast<double>(object_tests) / eyes;
   timeEach([&](const glm::dvec3& e) { backToFront(bsp, e, order, true); return order.size(); }, t.bsp_ns, ids_mean);
   timeEach([&](const glm::dvec3& e) { pfdQueryRuns(tree, e, runs); return runs.size(); }, t.runs_ns, t.runs_mean);
   timeEach([&](const glm::dvec3& e) { pfdQueryRefs(tree, e, lists); return lists.size(); }, t.refs_ns, t.refs_mean);
@@ -166,6 +171,8 @@ int runBuild(const BuildArgs& args) {
   options.tree.search_work = args.search_work;
   options.tree.root_search_lines = args.root_search_lines;
   options.tree.root_search_work = args.root_search_work;
+  options.object_extent = args.object_extent;
+  if (!(args.object_extent >= 0.0)) throw SceneError("--object-extent: expected a number >= 0");
 
   auto progress = [](const std::string& line) {
     std::fprintf(stderr, "%s\n", line.c_str());
@@ -287,6 +294,9 @@ int runBuild(const BuildArgs& args) {
       e["runs"] = s.runs;
       e["seqs"] = s.seqs;
       e["seq_items"] = s.seq_items;
+      e["objects"] = s.objects;
+      e["object_nodes"] = s.object_nodes;
+      e["object_fragments"] = s.object_fragments;
       e["bytes"] = s.bytes;
       e["view_cells"] = level.cells.size();
       e["build_seconds"] = s.build_seconds;
@@ -309,6 +319,7 @@ int runBuild(const BuildArgs& args) {
       e["runs_per_query"] = qt.runs_mean;
       e["query_refs_ns"] = qt.refs_ns;
       e["ref_ranges_per_query"] = qt.refs_mean;
+      e["object_tests_per_query"] = qt.object_tests_mean;
       e["bsp_query_ns"] = qt.bsp_ns;
       e["bsp_tests"] = file.bsp.stats.nodes;
       e["region_area"] = s.region_area;
@@ -392,6 +403,10 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("--cell-memory", args->cell_memory,
                   "A tree over this many bytes is cut into four view cells (default 64M; 0: never)");
   sub->add_option("--heuristic", args->heuristic, "Which undecided test-line first: balanced or traversal");
+  sub->add_option("--object-extent", args->object_extent,
+                  "Detail objects: BSP subtrees whose fragments fit in a box of this many eye heights are listed "
+                  "whole and ordered at query time by their own planes, never test-lines (0: none; default " +
+                      std::to_string(PfdLevelOptions{}.object_extent) + ")");
   sub->add_flag("--no-dedup", args->no_dedup, "Store every emitted run, not each distinct one once");
   sub->add_option("--share-min", args->share_min,
                   "Orders of at least this many ids are stored as sequences of their sub-orders (less memory, more "

@@ -142,7 +142,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
     uint64_t state = args.seed * 0x9E3779B97F4A7C15ull + l + 1;
     PfdCursor cursor;
     uint64_t compared = 0, mismatch = 0, coherent_mismatch = 0, on_line = 0, no_cell = 0, tests_max = 0;
-    double tests = 0.0, listed = 0.0, bsp_listed = 0.0;
+    double tests = 0.0, object_tests = 0.0, listed = 0.0, bsp_listed = 0.0;
     for (uint32_t e = 0; e < args.compare_bsp; ++e) {
       const glm::dvec3 eye = *samplePfdLevel(level, state);  // area_sum > 0 was checked above
       const PfdTree* tree = findPfdCell(level, eye);
@@ -162,6 +162,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
       backToFront(file.bsp, eye, ref, true);
       ++compared;
       tests += q.tests;
+      object_tests += q.object_tests;
       tests_max = std::max<uint64_t>(tests_max, q.tests);
       listed += static_cast<double>(order.size());
       bsp_listed += static_cast<double>(ref.size());
@@ -189,6 +190,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
     lj["coherent_mismatches"] = coherent_mismatch;
     lj["tests_mean"] = compared ? tests / static_cast<double>(compared) : 0.0;
     lj["tests_max"] = tests_max;
+    lj["object_tests_mean"] = compared ? object_tests / static_cast<double>(compared) : 0.0;
     lj["listed_mean"] = compared ? listed / static_cast<double>(compared) : 0.0;
     lj["bsp_listed_mean"] = compared ? bsp_listed / static_cast<double>(compared) : 0.0;
     levels.push_back(lj);

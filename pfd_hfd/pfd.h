@@ -282,9 +282,10 @@ struct PfdLineCount {
   uint64_t crossing = 0;
   double area = 0.0;
 };
-// Lines inside detail objects at object_extent (PfdOptions) are not counted: they are never tested.
+// Lines inside detail objects (`objects`: pfdObjectNodes of this BSP, or empty for none) are not
+// counted: they are never tested.
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                           const std::optional<PfdBox>& cell, double object_extent = 0.0);
+                           const std::optional<PfdBox>& cell, std::span<const uint8_t> objects = {});
 
 struct PfdQueryResult {
   uint32_t tests = 0;     // plane tests made (= internal nodes on the path)

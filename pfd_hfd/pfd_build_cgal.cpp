@@ -996,15 +996,23 @@ class Builder {
   // Appends list entries for `ids` (fragments and object marks; HFD: the visible ones),
   // deduplicated when asked.
   void addRun(std::span<const uint32_t> ids, const Region& r) {
+    splitMarks(
+        ids, [&](int32_t root) { addObject(root, r); }, [&](std::span<const uint32_t> f) { addFragments(f, r); });
+  }
+
+  // Calls object(BSP root) for each object mark of `ids` and fragments(stretch) for each maximal
+  // stretch of fragment ids between them, in order.
+  template <typename Object, typename Fragments>
+  static void splitMarks(std::span<const uint32_t> ids, Object&& object, Fragments&& fragments) {
     for (size_t b = 0; b < ids.size();) {
       if (ids[b] & kObjectMark) {
-        addObject(static_cast<int32_t>(ids[b] & ~kObjectMark), r);
+        object(static_cast<int32_t>(ids[b] & ~kObjectMark));
         ++b;
         continue;
       }
       size_t e = b;
       while (e < ids.size() && !(ids[e] & kObjectMark)) ++e;
-      addFragments(ids.subspan(b, e - b), r);
+      fragments(ids.subspan(b, e - b));
       b = e;
     }
   }
@@ -1063,18 +1071,12 @@ class Builder {
   // The references `ids` (fragments and object marks) make, appended to `items`: a run per stretch
   // of fragments, an object entry per mark.
   void appendRefs(const std::vector<uint32_t>& ids, std::vector<uint32_t>& items) {
-    for (size_t b = 0; b < ids.size();) {
-      if (ids[b] & kObjectMark) {
-        items.push_back(objectRef(static_cast<int32_t>(ids[b] & ~kObjectMark)));
-        ++b;
-        continue;
-      }
-      size_t e = b;
-      while (e < ids.size() && !(ids[e] & kObjectMark)) ++e;
-      plain_.assign(ids.begin() + static_cast<std::ptrdiff_t>(b), ids.begin() + static_cast<std::ptrdiff_t>(e));
-      items.push_back(findOrAddRun(plain_));
-      b = e;
-    }
+    splitMarks(
+        ids, [&](int32_t root) { items.push_back(objectRef(root)); },
+        [&](std::span<const uint32_t> f) {
+          plain_.assign(f.begin(), f.end());
+          items.push_back(findOrAddRun(plain_));
+        });
   }
 
   // One reference for `ids` (fragments and object marks): a run, an object, or a sequence of them.
@@ -1084,8 +1086,7 @@ class Builder {
     if (ref_items_.size() == 1) return ref_items_[0];
     uint64_t length = 0;
     for (uint32_t x : ref_items_) length += refLength(x);
-    const std::vector<uint32_t> items = ref_items_;  // findOrAddSeq may not alias the scratch
-    return findOrAddSeq(items, static_cast<uint32_t>(length));
+    return findOrAddSeq(ref_items_, static_cast<uint32_t>(length));
   }
 
   void addFragments(std::span<const uint32_t> ids, const Region& r) {
@@ -1707,16 +1708,17 @@ const char* treeKindName(TreeKind kind) {
 }
 
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                           const std::optional<PfdBox>& cell, double object_extent) {
+                           const std::optional<PfdBox>& cell, std::span<const uint8_t> objects) {
   if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
   Counters counters;
   const Region region = makeRegion(walkable, cell, counters);
   PfdLineCount count;
   for (const Piece& p : region) count.area += pieceArea(p);
   if (region.empty()) return count;
-  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, object_extent);
+  if (!objects.empty() && objects.size() != bsp.nodes.size())
+    throw SceneError("pfd: object node flags do not match the BSP");
   for (size_t i = 0; i < bsp.nodes.size(); ++i)
-    if (objects[i] == 0 && classifyRegion(planeLine(bsp.nodes[i].plane, height), region, counters) == kCross)
+    if ((objects.empty() || objects[i] == 0) && classifyRegion(planeLine(bsp.nodes[i].plane, height), region, counters) == kCross)
       ++count.crossing;
   return count;
 }

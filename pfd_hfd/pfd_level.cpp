@@ -78,6 +78,8 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
   PfdOptions tree_options = options.tree;
   if (options.object_extent > 0.0) tree_options.object_extent = options.object_extent * eye_height;
   if (!tree_options.drop_back_faces) tree_options.object_extent = 0.0;
+  // Once per level: every planned cell counts its lines without the objects'.
+  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, tree_options.object_extent);
 
   // Plan: depth first, so that the cells keep a fixed quadrant order.
   std::vector<PlannedCell> planned;
@@ -86,7 +88,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     while (!stack.empty()) {
       const PlannedCell c = stack.back();
       stack.pop_back();
-      const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box, tree_options.object_extent);
+      const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box, objects);
       if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
       const double estimate = per_line2 * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
       if (options.cell_memory != 0 && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
@@ -151,7 +153,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
                              std::to_string(planned[i].depth) + " subdivisions; raise --cell-memory or --max-memory");
       say(where + ": a cell went over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
       for (const PlannedCell& c : q)
-        if (countPfdLines(bsp, level.walkable, out.height, c.box, tree_options.object_extent).area > 0.0) again.push_back(c);
+        if (countPfdLines(bsp, level.walkable, out.height, c.box, objects).area > 0.0) again.push_back(c);
     }
     planned = std::move(again);
   }

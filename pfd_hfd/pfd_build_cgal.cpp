@@ -66,13 +66,21 @@ Corner makeCorner(const FT& x, const FT& z) {
   // built from it silently leave the corner out (freedoom2 MAP01 level 46: a piece decided to lie
   // on one side of a line it crosses, so a fragment was missing from the order). Computing the
   // exact value once makes the interval tight.
+  // A finite but wide interval is as bad in another way: the signs stay right (they use the
+  // radius), but the midpoint is what the tree stores as its region ring and what eyes are sampled
+  // from, and FZK-Haus had corners 0.3 m from where they are (a ring with a spike, eyes outside W).
+  // Wider than 1e-12 of the magnitude (a few thousand ulps: chains of clips stay far below it).
+  auto loose = [](const std::pair<double, double>& i) {
+    return !std::isfinite(i.first) || !std::isfinite(i.second) ||
+           i.second - i.first > 1e-12 * std::max({1.0, std::abs(i.first), std::abs(i.second)});
+  };
   auto ix = CGAL::to_interval(x);
   auto iz = CGAL::to_interval(z);
-  if (!std::isfinite(ix.first) || !std::isfinite(ix.second)) {
+  if (loose(ix)) {
     x.exact();
     ix = CGAL::to_interval(x);
   }
-  if (!std::isfinite(iz.first) || !std::isfinite(iz.second)) {
+  if (loose(iz)) {
     z.exact();
     iz = CGAL::to_interval(z);
   }
@@ -708,6 +716,19 @@ class Builder {
     if (ref & kPfdObjectBit) return out_.objects[ref & ~kPfdObjectBit].fragments;
     return out_.runs[ref].count;
   }
+  // The fragment ids an id list expands to: an object mark stands for all its fragments.
+  uint64_t idsLength(std::span<const uint32_t> ids) const {
+    uint64_t n = 0;
+    for (uint32_t x : ids) {
+      if (x & kObjectMark) {
+        const auto& range = frag_range_[x & ~kObjectMark];
+        n += range.second - range.first;
+      } else {
+        ++n;
+      }
+    }
+    return n;
+  }
   uint32_t refDepth(uint32_t ref) const { return ref & kPfdSeqBit ? seq_depth_[ref & ~kPfdSeqBit] : 0; }
 
   // Appends the ids `ref` expands to (sequences nest at most kPfdMaxSeqDepth deep).
@@ -810,12 +831,12 @@ class Builder {
     children(bsp_.nodes[node_id], s, far_child, near_child);
     own_.clear();
     emitFragments(bsp_.nodes[node_id], s, r, own_);
-    uint64_t length = uint64_t{refLength(far_ref)} + own_.size() + refLength(near_ref);
     small_far_.clear();
     small_near_.clear();
     if (far_child >= 0 && smallSubtree(far_child)) emitSubtree(far_child, r, small_far_);
     if (near_child >= 0 && smallSubtree(near_child)) emitSubtree(near_child, r, small_near_);
-    length += small_far_.size() + small_near_.size();
+    const uint64_t length = uint64_t{refLength(far_ref)} + idsLength(small_far_) + idsLength(own_) +
+                            idsLength(small_near_) + refLength(near_ref);
     if (length == 0) return kEmptyRun;
     if (length < std::max<uint32_t>(options_.share_min, 1)) {
       flat_.clear();

@@ -801,6 +801,26 @@ TEST(Pfd, ObjectsMatchBspOrder) {
         reordered_total += same && oa != ob;
       }
       EXPECT_GT(object_tests, 0u);
+      // The tree file checks that every sequence expands to its stated length, objects counted
+      // with all their fragments; the loaded tree gives the same orders.
+      TreeFile file;
+      file.bsp = bsp;
+      file.eye_height = scene.eye_height;
+      file.levels.push_back({});
+      file.levels[0].cells.push_back(tree);
+      const std::string path = (std::filesystem::temp_directory_path() /
+                                ("walkvis_test_pfd_objseq_" + std::to_string(::getpid()) + ".wvt"))
+                                   .string();
+      saveTreeFile(file, path);
+      const TreeFile back = loadTreeFile(path);
+      std::filesystem::remove(path);
+      if (extent == 1.0) EXPECT_GT(tree.seqs.size(), 0u);  // 1e9: the whole tree is one object
+      for (int i = 0; i < 200; ++i) {
+        const glm::dvec2 p = samplePfdRegion(tree, state);
+        pfdQuery(tree, {p.x, height, p.y}, oa);
+        pfdQuery(back.levels[0].cells[0], {p.x, height, p.y}, ob);
+        ASSERT_EQ(oa, ob);
+      }
     }
   }
   EXPECT_GT(multi_node_objects, 0u);

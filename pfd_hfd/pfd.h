@@ -119,6 +119,10 @@ struct PfdOptions {
   // an object whose fragments are all hidden from the region, else lists it whole.
   // PfdLevelOptions::object_extent sets it from the eye height.
   double object_extent = 0.0;
+  // HFD: an object with at least a few fragments still to test is first tested by the faces of its
+  // bounding box (VisibilityScene::boxVisibleFromRegion); a hidden box drops it whole, and its
+  // fragments stay hidden in the sub-regions. false: its fragments only.
+  bool object_boxes = true;
 };
 
 // The detail objects of `bsp` at `extent` (PfdOptions::object_extent): per BSP node 1 where an
@@ -185,6 +189,7 @@ struct PfdStats {
   uint64_t visibility_rays = 0;    // HFD: occlusion rays cast
   uint64_t hidden_rejected = 0;    // HFD: fragments dropped from a list as hidden
   uint64_t visibility_witnessed = 0;  // HFD: tests saved by an ancestor's witness (not in tree files)
+  uint64_t objects_box_rejected = 0;  // HFD: objects dropped whole by their hidden box (not in tree files)
   uint64_t visibility_hidden_rays = 0;  // HFD: rays of the tests answered hidden (not in tree files)
   // HFD, where the rays went (VisibilityCounters; not in tree files): tests proved hidden (one
   // blocker or one patch per sub-cone), the proof's rays, the refinement's rays, tests it found visible,

@@ -14,9 +14,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <span>
 #include <unordered_map>
+
+#include <glm/common.hpp>
 
 #include "bsp/exact_sign.h"
 #include "pfd_hfd/pfd.h"
@@ -517,6 +520,7 @@ class Builder {
   VisibilityCounters vis_counters;
   uint64_t hidden_rejected = 0;
   uint64_t visibility_witnessed = 0;
+  uint64_t objects_box_rejected = 0;
   uint64_t varying_count = 0;
   std::vector<double> leaf_areas;
   double leaf_bound_tests = 0.0;  // Σ over leaves of area × tested lines bounding the leaf
@@ -955,6 +959,35 @@ class Builder {
     }
   }
 
+  // HFD: whether the box of the object at `root` (fragments `ids`) is hidden from r, then marking
+  // them all hidden. Tried only when enough of them are still to test: a box costs up to five
+  // face tests where the fragments, when the object is hidden, cost one each (and a visible box
+  // is wasted work when its fragments are hidden from r after all).
+  bool boxHidden(int32_t root, std::span<const uint32_t> ids, const Region& r) {
+    size_t open = 0;
+    for (uint32_t f : ids) {
+      if (hidden_[f]) continue;
+      if (witnessedIn(f, r)) return false;
+      ++open;
+    }
+    if (!options_.object_boxes || open < kBoxMinFragments) return false;
+    if (object_box_.empty()) object_box_.assign(bsp_.nodes.size(), {glm::dvec3(1.0), glm::dvec3(0.0)});
+    auto& box = object_box_[root];
+    if (!(box.first.x <= box.second.x)) {
+      box = {glm::dvec3(std::numeric_limits<double>::infinity()), glm::dvec3(-std::numeric_limits<double>::infinity())};
+      for (uint32_t f : ids)
+        for (const glm::dvec3& v : bsp_.fragmentVertices(f)) {
+          box.first = glm::min(box.first, v);
+          box.second = glm::max(box.second, v);
+        }
+    }
+    if (options_.visibility->boxVisibleFromRegion(box.first, box.second, rings(r), height_, vis_counters)) return false;
+    ++objects_box_rejected;
+    for (uint32_t f : ids) markHidden(f);
+    return true;
+  }
+  static constexpr size_t kBoxMinFragments = 6;
+
   // HFD: whether every fragment of `ids` is hidden from r (or back-facing for all of it when back
   // faces are dropped), testing in fixed batches in order and stopping at the first batch with a
   // visible one, so that the answer and what is remembered do not depend on threads.
@@ -1042,7 +1075,8 @@ class Builder {
   // are hidden from r).
   void addObject(int32_t root, const Region& r) {
     const auto [fb, fe] = frag_range_[root];
-    if (hfd() && allHidden(std::span<const uint32_t>(frag_pre_.data() + fb, fe - fb), r)) return;
+    const std::span<const uint32_t> ids(frag_pre_.data() + fb, fe - fb);
+    if (hfd() && (boxHidden(root, ids, r) || allHidden(ids, r))) return;
     const uint32_t ref = objectRef(root);
     list_fragments += refLength(ref);
     out_.run_refs.push_back(ref);
@@ -1599,6 +1633,7 @@ class Builder {
   std::vector<uint8_t> varying_;     // the line crosses the tree's whole region
   std::vector<uint32_t> vary_list_, frag_pre_;
   std::vector<std::pair<uint32_t, uint32_t>> vary_range_, frag_range_;
+  std::vector<std::pair<glm::dvec3, glm::dvec3>> object_box_;  // HFD: per object root, made on first use
   std::vector<uint8_t> hidden_;      // HFD: hidden from an ancestor region on the current path
   std::vector<uint32_t> hidden_log_;
   // HFD: per fragment, the eye that last saw it on the current path (docs/DESIGN.md, "HFD tree":
@@ -1795,6 +1830,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.visibility_rays = builder.vis_counters.rays;
   s.hidden_rejected = builder.hidden_rejected;
   s.visibility_witnessed = builder.visibility_witnessed;
+  s.objects_box_rejected = builder.objects_box_rejected;
   s.visibility_hidden_rays = builder.vis_counters.hidden_rays;
   s.visibility_proved_hidden = builder.vis_counters.proved_hidden;
   s.visibility_proof_rays = builder.vis_counters.proof_rays;

@@ -413,6 +413,19 @@ struct VisibilityScene::Impl {
   // one tall one at a T-junction).
   EdgePartners edge_partners;
 
+  // What visibleTarget tests: a convex polygon (counter-clockwise from the front), its plane, the
+  // outline it belongs to (never a patch of its own occluders), and the key its samples are
+  // seeded with.
+  static constexpr uint32_t kNoOutline = UINT32_MAX;
+  struct Target {
+    std::span<const glm::dvec3> vertices;
+    Plane plane;
+    uint32_t outline = kNoOutline;
+    uint64_t key = 0;
+  };
+  bool visibleTarget(const Target& shape, std::span<const std::vector<glm::dvec2>> region, double height,
+                     VisibilityCounters& counters, glm::dvec2* witness) const;
+
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -776,18 +789,82 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
 bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region,
                                         double height, VisibilityCounters& counters, glm::dvec2* witness) const {
   const Impl& s = *impl_;
+  if (fragment >= s.fragments.size()) {
+    ++counters.tests;
+    return false;
+  }
+  const Polygon& p = s.fragments[fragment];
+  const Impl::Target target{std::span<const glm::dvec3>(s.vertices).subspan(p.first_vertex, p.vertex_count), p.plane,
+                            s.fragment_outline[fragment], fragment};
+  return s.visibleTarget(target, region, height, counters, witness);
+}
+
+bool VisibilityScene::boxVisibleFromRegion(const glm::dvec3& lo, const glm::dvec3& hi,
+                                           std::span<const std::vector<glm::dvec2>> region, double height,
+                                           VisibilityCounters& counters) const {
+  const Impl& s = *impl_;
+  if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return true;  // not a box (NaN): nothing is claimed
+  // An eye inside the box sees the object from within, where no face stands between: such a
+  // region is never said to miss the box (its pieces' bounds meeting the box's footprint).
+  if (height >= lo.y && height <= hi.y) {
+    for (const auto& piece : region) {
+      if (piece.empty()) continue;
+      glm::dvec2 plo = piece[0], phi = piece[0];
+      for (const glm::dvec2& v : piece) {
+        plo = glm::min(plo, v);
+        phi = glm::max(phi, v);
+      }
+      if (plo.x <= hi.x && phi.x >= lo.x && plo.y <= hi.z && phi.y >= lo.z) return true;
+    }
+  }
+  uint64_t key = 0x6a09e667f3bcc908ull;
+  for (const double c : {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z}) {
+    uint64_t bits;
+    std::memcpy(&bits, &c, 8);
+    key = mixHash(key, bits);
+  }
+  // The six faces, each counter-clockwise seen from outside (its normal outward). A face of no
+  // area (a flat object's box) is left out: the two faces it lies between stand for the object.
+  const glm::dvec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
+                           {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
+  struct Face {
+    int v[4];
+    glm::dvec3 n;
+    double d;
+    bool flat;
+  };
+  const Face faces[6] = {
+      {{0, 4, 7, 3}, {-1, 0, 0}, -lo.x, lo.y == hi.y || lo.z == hi.z},
+      {{1, 2, 6, 5}, {1, 0, 0}, hi.x, lo.y == hi.y || lo.z == hi.z},
+      {{0, 1, 5, 4}, {0, -1, 0}, -lo.y, lo.x == hi.x || lo.z == hi.z},
+      {{3, 7, 6, 2}, {0, 1, 0}, hi.y, lo.x == hi.x || lo.z == hi.z},
+      {{0, 3, 2, 1}, {0, 0, -1}, -lo.z, lo.x == hi.x || lo.y == hi.y},
+      {{4, 5, 6, 7}, {0, 0, 1}, hi.z, lo.x == hi.x || lo.y == hi.y},
+  };
+  for (int f = 0; f < 6; ++f) {
+    if (faces[f].flat) continue;
+    const glm::dvec3 v[4] = {c[faces[f].v[0]], c[faces[f].v[1]], c[faces[f].v[2]], c[faces[f].v[3]]};
+    // No blocker has outline kNoOutline, so the proof may use any patch.
+    const Impl::Target target{std::span<const glm::dvec3>(v, 4), Plane{faces[f].n, faces[f].d}, Impl::kNoOutline,
+                              mixHash(key, static_cast<uint64_t>(f))};
+    if (s.visibleTarget(target, region, height, counters, nullptr)) return true;
+  }
+  return false;
+}
+
+bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const std::vector<glm::dvec2>> region,
+                                          double height, VisibilityCounters& counters, glm::dvec2* witness) const {
+  const Impl& s = *this;
   const VisibilityOptions& opt = s.options;
   ++counters.tests;
-  if (fragment >= s.fragments.size()) return false;
-  const Polygon& target_poly = s.fragments[fragment];
-  if (target_poly.vertex_count < 3) return false;
+  if (shape.vertices.size() < 3) return false;
   Scratch& sc = scratch();
   const double region_inset = kRegionInset * s.extent;
   const double end_gap = kEndGap * s.extent;
   const double min_gap = kMinGap * s.extent;
 
-  // Seed: the options' seed, the fragment, the region's vertices and the height.
-  uint64_t h = mixHash(opt.seed, fragment);
+  // Seed: the options' seed, the target's key, the region's vertices and the height.
+  uint64_t h = mixHash(opt.seed, shape.key);
   {
     uint64_t bits;
     std::memcpy(&bits, &height, 8);
@@ -829,14 +906,14 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
   auto eyeAt = [&](const glm::dvec2& p) { return glm::dvec3(p.x, height, p.y); };
 
   // Target in its plane basis, pulled in from its edges.
-  const Plane& tp = target_poly.plane;
+  const Plane& tp = shape.plane;
   glm::dvec3 tu, tw;
   planeBasis(tp.n, tu, tw);
   const glm::dvec3 tbase = tp.n * tp.d;
   sc.target2.clear();
   glm::dvec2 tc{0.0};
-  for (uint32_t k = 0; k < target_poly.vertex_count; ++k) {
-    const glm::dvec3 v = s.vertices[target_poly.first_vertex + k] - tbase;
+  for (const glm::dvec3& corner : shape.vertices) {
+    const glm::dvec3 v = corner - tbase;
     sc.target2.push_back({glm::dot(v, tu), glm::dot(v, tw)});
     tc += sc.target2.back();
   }
@@ -1015,7 +1092,7 @@ bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::
             for (const auto& t : tq) sc.target3.push_back(target3(t));
             parts3 = true;
           }
-          covered = s.patchCovers(o, s.fragment_outline[fragment], sc.region3, sc.target3, min_gap, end_gap, min_gap, sc);
+          covered = s.patchCovers(o, shape.outline, sc.region3, sc.target3, min_gap, end_gap, min_gap, sc);
           if (covered) ++counters.patch_covers;
         }
       }

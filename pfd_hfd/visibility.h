@@ -99,6 +99,14 @@ class VisibilityScene {
   bool visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region, double height,
                          VisibilityCounters& counters, glm::dvec2* witness = nullptr) const;
 
+  // The same test for the surface of an axis-aligned box lo..hi, face by face: false when every
+  // face is hidden from every sample (or, conservative, proved hidden). Whatever the box holds is
+  // then hidden too, since a ray to any point inside meets the box's surface first with the same
+  // stretch behind it. True when the region's bounds meet the box's footprint at a height inside
+  // it (an eye may stand within the box). Used to drop a detail object whole.
+  bool boxVisibleFromRegion(const glm::dvec3& lo, const glm::dvec3& hi, std::span<const std::vector<glm::dvec2>> region,
+                            double height, VisibilityCounters& counters) const;
+
   const VisibilityOptions& options() const;
 
   // One line on the Embree build in use: version and which ray packet widths it runs natively

@@ -157,12 +157,14 @@ void checkStructure(const BspTree& bsp, const PfdTree& tree) {
   EXPECT_LE(tree.stats.test_planes, bsp.nodes.size() + bsp.fragments.size());
   EXPECT_LE(tree.stats.tests_max, tree.stats.depth_max);
   EXPECT_LE(tree.stats.tests_max, bsp.nodes.size() + bsp.fragments.size());
-  // No decision tree over these leaves does better on average than their entropy (sampling noise aside).
-  EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_entropy_bound);
+  // No decision tree over these leaves does better on average than their entropy (sampling noise
+  // aside; 1e-9 bits: slivers of area ~1e-16 of the region, which no sampled eye reaches, add
+  // ~1e-15 bits to the bound and nothing to the sampled mean).
+  EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_entropy_bound - 1e-9);
   // Huffman's optimum lies between the entropy and the entropy + 1, and no tree beats it either.
   EXPECT_GE(tree.stats.tests_huffman_bound, tree.stats.tests_entropy_bound - 1e-9);
   EXPECT_LE(tree.stats.tests_huffman_bound, tree.stats.tests_entropy_bound + 1.0 + 1e-9);
-  EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_huffman_bound);
+  EXPECT_GE(tree.stats.tests_mean, 0.9 * tree.stats.tests_huffman_bound - 1e-9);
   // Every leaf lies below the tests of the lines that bound it (sampling noise aside).
   EXPECT_GE(tree.stats.tests_mean, 0.95 * tree.stats.tests_cell_bound);
   EXPECT_LE(tree.stats.pool_entries, tree.stats.list_fragments);
@@ -814,7 +816,9 @@ TEST(Pfd, ObjectsMatchBspOrder) {
       saveTreeFile(file, path);
       const TreeFile back = loadTreeFile(path);
       std::filesystem::remove(path);
-      if (extent == 1.0) EXPECT_GT(tree.seqs.size(), 0u);  // 1e9: the whole tree is one object
+      if (extent == 1.0) {  // 1e9: the whole tree is one object
+        EXPECT_GT(tree.seqs.size(), 0u);
+      }
       for (int i = 0; i < 200; ++i) {
         const glm::dvec2 p = samplePfdRegion(tree, state);
         pfdQuery(tree, {p.x, height, p.y}, oa);

@@ -507,6 +507,74 @@ TEST(Visibility, WitnessLiesInTheRegionAndSeesTheFragment) {
   EXPECT_GT(visible, 10);
 }
 
+// A detail object's box (VisibilityScene::boxVisibleFromRegion): hidden behind a closed wall, seen
+// through a door, never hidden from a region whose eyes may stand inside it; and over random boxes
+// and regions of room grids, a box the conservative mode rejects has no clear ray to any point of
+// its surface from any point of the region (brute force, 400 rays each).
+TEST(Visibility, HiddenBoxHidesWhatItHolds) {
+  const glm::dvec3 box_lo{12.0, 0.0, 3.0}, box_hi{13.5, 1.2, 6.0};  // in room B
+  for (const bool conservative : {false, true}) {
+    VisibilityOptions options;
+    options.conservative = conservative;
+    VisibilityCounters c;
+    const TwoRooms closed = twoRooms(0.0);
+    const BspTree bsp = buildBsp(closed.scene);
+    const VisibilityScene vis = VisibilityScene::build(bsp, options);
+    EXPECT_FALSE(vis.boxVisibleFromRegion(box_lo, box_hi, kRoomA, 1.5, c));
+    EXPECT_GT(c.tests, 1u);  // face by face
+    // A flat box (a panel) is tested by its two large faces.
+    EXPECT_FALSE(vis.boxVisibleFromRegion({12.0, 0.0, 3.0}, {12.0, 1.2, 6.0}, kRoomA, 1.5, c));
+    const Region room_b{{{10, 0}, {20, 0}, {20, 10}, {10, 10}}};
+    EXPECT_TRUE(vis.boxVisibleFromRegion(box_lo, box_hi, room_b, 1.5, c));
+    // The eye height inside the box and the region over its footprint: an eye may be inside.
+    EXPECT_TRUE(vis.boxVisibleFromRegion({12.0, 0.0, 3.0}, {13.5, 2.0, 6.0}, room_b, 1.5, c));
+    const TwoRooms door = twoRooms(2.0);
+    const BspTree bsp_door = buildBsp(door.scene);
+    const VisibilityScene vis_door = VisibilityScene::build(bsp_door, options);
+    EXPECT_TRUE(vis_door.boxVisibleFromRegion({12.0, 0.0, 4.0}, {13.0, 1.2, 6.0}, kRoomA, 1.5, c));
+  }
+  VisibilityOptions conservative;
+  conservative.conservative = true;
+  int rejected = 0, kept = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const Scene scene = roomGrid(seed, 3);
+    const BspTree bsp = buildBsp(scene);
+    conservative.seed = seed;
+    const VisibilityScene vis = VisibilityScene::build(bsp, conservative);
+    std::mt19937_64 rng(seed * 91);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int trial = 0; trial < 40; ++trial) {
+      const std::optional<Box> region = randomBox(rng);
+      if (!region) continue;
+      const glm::dvec3 lo{0.5 + 27.0 * u(rng), 0.0, 0.5 + 27.0 * u(rng)};
+      const glm::dvec3 hi = lo + glm::dvec3{0.3 + 1.5 * u(rng), 0.3 + 1.0 * u(rng), 0.3 + 1.5 * u(rng)};
+      VisibilityCounters c;
+      if (vis.boxVisibleFromRegion(lo, hi, region->region, 1.5, c)) {
+        ++kept;
+        continue;
+      }
+      ++rejected;
+      const auto [x0, x1, z0, z1] = region->bounds;
+      for (int k = 0; k < 400; ++k) {
+        const glm::dvec3 eye{x0 + (x1 - x0) * (0.01 + 0.98 * u(rng)), 1.5, z0 + (z1 - z0) * (0.01 + 0.98 * u(rng))};
+        // A point of the box's surface: a random point inside pushed out to its nearest face.
+        glm::dvec3 p = lo + (hi - lo) * glm::dvec3{u(rng), u(rng), u(rng)};
+        int axis = 0;
+        double best = 1e300;
+        for (int a = 0; a < 3; ++a)
+          for (const double side : {lo[a], hi[a]})
+            if (std::abs(p[a] - side) < best) best = std::abs(p[a] - side), axis = a;
+        p[axis] = std::abs(p[axis] - lo[axis]) < std::abs(p[axis] - hi[axis]) ? lo[axis] : hi[axis];
+        // Stop just short of the surface, where a wall the box touches does not count.
+        const glm::dvec3 to = eye + (p - eye) * (1.0 - 1e-6);
+        ASSERT_TRUE(vis.occluded(eye, to)) << "seed " << seed << " trial " << trial << ": a clear ray to a rejected box";
+      }
+    }
+  }
+  EXPECT_GT(rejected, 5);
+  EXPECT_GT(kept, 5);
+}
+
 TEST(Visibility, DegenerateRegionsAndBackFaces) {
   const TwoRooms r = twoRooms(0.2);
   const BspTree bsp = buildBsp(r.scene);

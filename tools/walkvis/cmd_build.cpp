@@ -35,6 +35,7 @@ struct BuildArgs {
   bool no_fuse_occluders = false;
   std::string visibility_mode = "sampled";
   bool no_dedup = false;
+  bool no_object_boxes = false;
   uint32_t share_min = PfdOptions{}.share_min;
   uint32_t stat_eyes = 10000;
   uint32_t search_lines = PfdOptions{}.search_lines;
@@ -96,6 +97,7 @@ constexpr std::pair<const char*, uint64_t PfdStats::*> kVisibilityFields[] = {
     {"visibility_rays", &PfdStats::visibility_rays},
     {"hidden_rejected", &PfdStats::hidden_rejected},
     {"visibility_witnessed", &PfdStats::visibility_witnessed},
+    {"objects_box_rejected", &PfdStats::objects_box_rejected},
     {"visibility_hidden_rays", &PfdStats::visibility_hidden_rays},
     {"visibility_proved_hidden", &PfdStats::visibility_proved_hidden},
     {"visibility_proof_rays", &PfdStats::visibility_proof_rays},
@@ -165,6 +167,7 @@ int runBuild(const BuildArgs& args) {
   else if (args.heuristic == "traversal") options.tree.heuristic = PfdHeuristic::kTraversal;
   else throw SceneError("--heuristic: expected balanced or traversal, got '" + args.heuristic + "'");
   options.tree.dedup = !args.no_dedup;
+  options.tree.object_boxes = !args.no_object_boxes;
   options.tree.share_min = args.share_min;
   options.tree.stat_eyes = args.stat_eyes;
   options.tree.search_lines = args.search_lines;
@@ -248,6 +251,7 @@ int runBuild(const BuildArgs& args) {
   j["cell_memory"] = options.cell_memory;
   j["heuristic"] = args.heuristic;
   j["dedup"] = !args.no_dedup;
+  j["object_boxes"] = !args.no_object_boxes;
   j["share_min"] = args.share_min;
   j["search_lines"] = args.search_lines;
   j["search_work"] = args.search_work;
@@ -407,6 +411,8 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                   "Detail objects: BSP subtrees whose fragments fit in a box of this many eye heights are listed "
                   "whole and ordered at query time by their own planes, never test-lines (0: none; default " +
                       std::to_string(PfdLevelOptions{}.object_extent) + ")");
+  sub->add_flag("--no-object-boxes", args->no_object_boxes,
+                "HFD: test detail objects by their fragments only, not first by the faces of their bounding box");
   sub->add_flag("--no-dedup", args->no_dedup, "Store every emitted run, not each distinct one once");
   sub->add_option("--share-min", args->share_min,
                   "Orders of at least this many ids are stored as sequences of their sub-orders (less memory, more "

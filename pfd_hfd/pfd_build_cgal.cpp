@@ -960,9 +960,9 @@ class Builder {
   }
 
   // HFD: whether the box of the object at `root` (fragments `ids`) is hidden from r, then marking
-  // them all hidden. Tried only when enough of them are still to test: a box costs up to five
-  // face tests where the fragments, when the object is hidden, cost one each (and a visible box
-  // is wasted work when its fragments are hidden from r after all).
+  // them all hidden. Tried only when enough of them are still to test: a box costs up to six face
+  // tests (a face turned away from every eye casts no ray) where the fragments of a hidden object
+  // cost one each, and a visible box is wasted work when its fragments are hidden from r after all.
   bool boxHidden(int32_t root, std::span<const uint32_t> ids, const Region& r) {
     size_t open = 0;
     for (uint32_t f : ids) {

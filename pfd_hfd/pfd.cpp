@@ -246,9 +246,11 @@ PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdC
   return result;
 }
 
-std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent) {
+std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent,
+                                    std::vector<std::pair<glm::dvec3, glm::dvec3>>* boxes) {
   const size_t n = bsp.nodes.size();
   std::vector<uint8_t> out(n, 0);
+  if (boxes) boxes->clear();
   if (!(extent > 0.0) || n == 0) return out;
   // Bottom up (children have larger indices): each subtree's box and whether all its fragments
   // lie in their node's plane (orientation ±1: facing follows the node's side).
@@ -279,6 +281,10 @@ std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent) {
     }
     const glm::dvec3 e = hi[i] - lo[i];
     if (plain[i] && lo[i].x <= hi[i].x && std::max({e.x, e.y, e.z}) <= extent) out[i] = 1;
+  }
+  if (boxes) {
+    boxes->resize(n);
+    for (size_t i = 0; i < n; ++i) (*boxes)[i] = {lo[i], hi[i]};
   }
   return out;
 }

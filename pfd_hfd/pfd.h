@@ -25,6 +25,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -127,7 +128,10 @@ struct PfdOptions {
 
 // The detail objects of `bsp` at `extent` (PfdOptions::object_extent): per BSP node 1 where an
 // object is rooted, 2 strictly inside one, 0 elsewhere (the structure). All 0 for extent <= 0.
-std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent);
+// `boxes` (may be null): per BSP node the bounding box (lo, hi) of its subtree's fragments; left
+// empty for extent <= 0.
+std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent,
+                                    std::vector<std::pair<glm::dvec3, glm::dvec3>>* boxes = nullptr);
 
 enum class TreeKind : uint8_t { kPfd = 0, kHfd = 1 };
 const char* treeKindName(TreeKind kind);  // "pfd", "hfd"

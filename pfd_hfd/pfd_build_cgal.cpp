@@ -14,12 +14,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <limits>
 #include <optional>
 #include <span>
 #include <unordered_map>
-
-#include <glm/common.hpp>
 
 #include "bsp/exact_sign.h"
 #include "pfd_hfd/pfd.h"
@@ -414,8 +411,9 @@ struct RefFrame {
 class Builder {
  public:
   Builder(const BspTree& bsp, double height, const PfdOptions& options, const Region& root,
-          const std::vector<uint8_t>& objects, PfdTree& out)
-      : bsp_(bsp), options_(options), out_(out), height_(height), object_(objects) {
+          const std::vector<uint8_t>& objects, const std::vector<std::pair<glm::dvec3, glm::dvec3>>& object_boxes,
+          PfdTree& out)
+      : bsp_(bsp), options_(options), out_(out), height_(height), object_(objects), object_box_(object_boxes) {
     const size_t nn = bsp.nodes.size();
     if (bsp.fragments.size() >= kObjectMark) throw PfdBudgetError("pfd: more than 2^31 fragments");
     object_of_.assign(nn, UINT32_MAX);
@@ -959,46 +957,24 @@ class Builder {
     }
   }
 
-  // HFD: whether the box of the object at `root` (fragments `ids`) is hidden from r, then marking
-  // them all hidden. Tried only when enough of them are still to test: a box costs up to six face
-  // tests (a face turned away from every eye casts no ray) where the fragments of a hidden object
-  // cost one each, and a visible box is wasted work when its fragments are hidden from r after all.
-  bool boxHidden(int32_t root, std::span<const uint32_t> ids, const Region& r) {
-    size_t open = 0;
-    for (uint32_t f : ids) {
-      if (hidden_[f]) continue;
-      if (witnessedIn(f, r)) return false;
-      ++open;
-    }
-    if (!options_.object_boxes || open < kBoxMinFragments) return false;
-    if (object_box_.empty()) object_box_.assign(bsp_.nodes.size(), {glm::dvec3(1.0), glm::dvec3(0.0)});
-    auto& box = object_box_[root];
-    if (!(box.first.x <= box.second.x)) {
-      box = {glm::dvec3(std::numeric_limits<double>::infinity()), glm::dvec3(-std::numeric_limits<double>::infinity())};
-      for (uint32_t f : ids)
-        for (const glm::dvec3& v : bsp_.fragmentVertices(f)) {
-          box.first = glm::min(box.first, v);
-          box.second = glm::max(box.second, v);
-        }
-    }
-    if (options_.visibility->boxVisibleFromRegion(box.first, box.second, rings(r), height_, vis_counters)) return false;
-    ++objects_box_rejected;
-    for (uint32_t f : ids) markHidden(f);
-    return true;
-  }
-  static constexpr size_t kBoxMinFragments = 6;
-
   // HFD: whether every fragment of `ids` is hidden from r (or back-facing for all of it when back
   // faces are dropped), testing in fixed batches in order and stopping at the first batch with a
   // visible one, so that the answer and what is remembered do not depend on threads.
-  bool allHidden(std::span<const uint32_t> ids, const Region& r) {
+  // `object_root` >= 0: `ids` are that detail object's fragments, and when enough of them are still
+  // to test, the object's box is tried first (PfdOptions::object_boxes): a box costs up to six face
+  // tests (a face turned away from every eye casts no ray) where the fragments of a hidden object
+  // cost one each, and a visible box is wasted work when its fragments are hidden from r after
+  // all. A hidden box marks them all hidden.
+  bool allHidden(std::span<const uint32_t> ids, const Region& r, int32_t object_root = -1) {
     to_test_.clear();
+    size_t open = 0;  // not hidden from an ancestor
     for (uint32_t f : ids) {
       if (hidden_[f]) continue;
       if (witnessedIn(f, r)) {
         ++visibility_witnessed;
         return false;  // seen from a point of r: not all hidden, whatever the others are
       }
+      ++open;
       if (options_.drop_back_faces) {
         const int8_t o = bsp_.fragment_orientation[f];
         const uint32_t node_line = static_cast<uint32_t>(&nodeOf(f) - bsp_.nodes.data());
@@ -1006,6 +982,14 @@ class Builder {
         if (s != kCross && (o != 0 ? s * o : s) <= 0) continue;  // back-facing everywhere in r
       }
       to_test_.push_back(f);
+    }
+    if (object_root >= 0 && options_.object_boxes && open >= kBoxMinFragments) {
+      const auto& [lo, hi] = object_box_[object_root];
+      if (!options_.visibility->boxVisibleFromRegion(lo, hi, rings(r), height_, vis_counters)) {
+        ++objects_box_rejected;
+        for (uint32_t f : ids) markHidden(f);
+        return true;
+      }
     }
     constexpr size_t kBatch = 32;
     for (size_t start = 0; start < to_test_.size(); start += kBatch) {
@@ -1076,7 +1060,7 @@ class Builder {
   void addObject(int32_t root, const Region& r) {
     const auto [fb, fe] = frag_range_[root];
     const std::span<const uint32_t> ids(frag_pre_.data() + fb, fe - fb);
-    if (hfd() && (boxHidden(root, ids, r) || allHidden(ids, r))) return;
+    if (hfd() && allHidden(ids, r, root)) return;
     const uint32_t ref = objectRef(root);
     list_fragments += refLength(ref);
     out_.run_refs.push_back(ref);
@@ -1633,7 +1617,6 @@ class Builder {
   std::vector<uint8_t> varying_;     // the line crosses the tree's whole region
   std::vector<uint32_t> vary_list_, frag_pre_;
   std::vector<std::pair<uint32_t, uint32_t>> vary_range_, frag_range_;
-  std::vector<std::pair<glm::dvec3, glm::dvec3>> object_box_;  // HFD: per object root, made on first use
   std::vector<uint8_t> hidden_;      // HFD: hidden from an ancestor region on the current path
   std::vector<uint32_t> hidden_log_;
   // HFD: per fragment, the eye that last saw it on the current path (docs/DESIGN.md, "HFD tree":
@@ -1664,6 +1647,8 @@ class Builder {
   // kObjectMark | its BSP root (fragment ids stay below it).
   static constexpr uint32_t kObjectMark = 0x80000000u;
   const std::vector<uint8_t>& object_;
+  const std::vector<std::pair<glm::dvec3, glm::dvec3>>& object_box_;  // per BSP node, its subtree's box
+  static constexpr size_t kBoxMinFragments = 6;
   std::vector<uint32_t> object_of_;
   std::vector<int32_t> object_root_;
   std::vector<uint32_t> plain_, ref_items_;
@@ -1789,7 +1774,9 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
 
   Counters counters;
   Region region = makeRegion(walkable, cell, counters);
-  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, options.drop_back_faces ? options.object_extent : 0.0);
+  std::vector<std::pair<glm::dvec3, glm::dvec3>> object_boxes;
+  const std::vector<uint8_t> objects =
+      pfdObjectNodes(bsp, options.drop_back_faces ? options.object_extent : 0.0, &object_boxes);
   if (options.trim_slivers) trimSlivers(region, bsp, height, objects, counters);
   for (const Piece& p : region) {
     std::vector<glm::dvec2> ring;
@@ -1798,7 +1785,7 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
     tree.stats.region_area += pieceArea(p);
   }
 
-  Builder builder(bsp, height, options, region, objects, tree);
+  Builder builder(bsp, height, options, region, objects, object_boxes, tree);
   if (!region.empty()) builder.run(std::move(region));
   else tree.nodes.push_back({});
 

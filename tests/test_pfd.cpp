@@ -18,6 +18,23 @@
 namespace walkvis {
 namespace {
 
+// A temporary tree file path, unique to this process and `tag`.
+std::string tempTreePath(const std::string& tag) {
+  return (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_" + tag + std::to_string(::getpid()) + ".wvt"))
+      .string();
+}
+
+// A tree file of one level holding one tree.
+TreeFile oneCellFile(const BspTree& bsp, double eye_height, const PfdTree& tree, TreeKind kind = TreeKind::kPfd) {
+  TreeFile file;
+  file.bsp = bsp;
+  file.eye_height = eye_height;
+  file.kind = kind;
+  file.levels.push_back({});
+  file.levels[0].cells.push_back(tree);
+  return file;
+}
+
 // A building-like scene: a floor, vertical walls (random orientation and facing, some slanted in
 // plan), a ramp, and a horizontal slab exactly in the height plane.
 Scene randomBuilding(uint64_t seed, int walls, double eye_height) {
@@ -650,7 +667,7 @@ TEST(Pfd, TreeFileRoundTripAndCorruption) {
   options.tree.stat_eyes = 100;
   uint64_t used = 0;
   file.levels.push_back(buildPfdLevel(file.bsp, scene.levels[0], 0, scene.eye_height, options, used));
-  const std::string path = (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_" + std::to_string(::getpid()) + ".wvt")).string();
+  const std::string path = tempTreePath("");
   saveTreeFile(file, path);
   const TreeFile back = loadTreeFile(path);
   ASSERT_EQ(back.levels.size(), 1u);
@@ -720,12 +737,8 @@ TEST(Pfd, SequencesShareSubOrders) {
       ASSERT_EQ(a, b);
     }
     if (tree.stats.seqs == 0) continue;
-    TreeFile file;
-    file.bsp = bsp;
-    file.eye_height = scene.eye_height;
-    file.levels.push_back({});
-    file.levels[0].cells.push_back(tree);
-    const std::string path = (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_seq_" + std::to_string(::getpid()) + ".wvt")).string();
+    TreeFile file = oneCellFile(bsp, scene.eye_height, tree);
+    const std::string path = tempTreePath("seq_");
     saveTreeFile(file, path);
     const TreeFile back = loadTreeFile(path);
     const PfdTree& t = back.levels[0].cells[0];
@@ -805,15 +818,8 @@ TEST(Pfd, ObjectsMatchBspOrder) {
       EXPECT_GT(object_tests, 0u);
       // The tree file checks that every sequence expands to its stated length, objects counted
       // with all their fragments; the loaded tree gives the same orders.
-      TreeFile file;
-      file.bsp = bsp;
-      file.eye_height = scene.eye_height;
-      file.levels.push_back({});
-      file.levels[0].cells.push_back(tree);
-      const std::string path = (std::filesystem::temp_directory_path() /
-                                ("walkvis_test_pfd_objseq_" + std::to_string(::getpid()) + ".wvt"))
-                                   .string();
-      saveTreeFile(file, path);
+      const std::string path = tempTreePath("objseq_");
+      saveTreeFile(oneCellFile(bsp, scene.eye_height, tree), path);
       const TreeFile back = loadTreeFile(path);
       std::filesystem::remove(path);
       if (extent == 1.0) {  // 1e9: the whole tree is one object
@@ -863,14 +869,8 @@ TEST(Pfd, HfdObjectsAreSubsequenceAndLoadChecked) {
       if (k < b.size() && b[k] == f) ++k;
     ASSERT_EQ(k, b.size()) << "HFD list is not a subsequence of the PFD order";
   }
-  TreeFile file;
-  file.bsp = bsp;
-  file.eye_height = scene.eye_height;
-  file.kind = TreeKind::kHfd;
-  file.levels.push_back({});
-  file.levels[0].cells.push_back(hfd_tree);
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("walkvis_test_pfd_obj_" + std::to_string(::getpid()) + ".wvt")).string();
+  TreeFile file = oneCellFile(bsp, scene.eye_height, hfd_tree, TreeKind::kHfd);
+  const std::string path = tempTreePath("obj_");
   saveTreeFile(file, path);
   const TreeFile back = loadTreeFile(path);
   const PfdTree& t = back.levels[0].cells[0];

@@ -526,8 +526,11 @@ TEST(Visibility, HiddenBoxHidesWhatItHolds) {
     EXPECT_FALSE(vis.boxVisibleFromRegion({12.0, 0.0, 3.0}, {12.0, 1.2, 6.0}, kRoomA, 1.5, c));
     const Region room_b{{{10, 0}, {20, 0}, {20, 10}, {10, 10}}};
     EXPECT_TRUE(vis.boxVisibleFromRegion(box_lo, box_hi, room_b, 1.5, c));
-    // The eye height inside the box and the region over its footprint: an eye may be inside.
-    EXPECT_TRUE(vis.boxVisibleFromRegion({12.0, 0.0, 3.0}, {13.5, 2.0, 6.0}, room_b, 1.5, c));
+    EXPECT_TRUE(vis.boxVisibleFromRegion({12.0, 0.0, 3.0}, {12.0, 1.2, 6.0}, room_b, 1.5, c));
+    // The eye height inside the box and the region within its footprint: every eye stands behind
+    // every face, so only the rule for eyes inside keeps the box.
+    const Region inside{{{12.2, 3.2}, {13.3, 3.2}, {13.3, 5.8}, {12.2, 5.8}}};
+    EXPECT_TRUE(vis.boxVisibleFromRegion({12.0, 0.0, 3.0}, {13.5, 2.0, 6.0}, inside, 1.5, c));
     const TwoRooms door = twoRooms(2.0);
     const BspTree bsp_door = buildBsp(door.scene);
     const VisibilityScene vis_door = VisibilityScene::build(bsp_door, options);

@@ -124,6 +124,9 @@ struct PfdOptions {
   // bounding box (VisibilityScene::boxVisibleFromRegion); a hidden box drops it whole, and its
   // fragments stay hidden in the sub-regions. false: its fragments only.
   bool object_boxes = true;
+  // Called (may be empty) from the building thread after each leaf with the fraction of the
+  // region's area that finished leaves cover, for progress and an ETA by area.
+  std::function<void(double)> progress;
 };
 
 // The detail objects of `bsp` at `extent` (PfdOptions::object_extent): per BSP node 1 where an
@@ -362,6 +365,8 @@ struct PfdLevelOptions {
   PfdOptions tree;
   // Per view cell: a tree over more than this many bytes is discarded and its cell cut into four
   // (by the middle of the cell's region bounds), down to max_cell_depth. 0 = one cell per level.
+  // PFD levels are first planned into cells by an estimate of their size (pfd_level.cpp); HFD
+  // levels start as one cell.
   uint64_t cell_memory = 64ull << 20;
   uint32_t max_cell_depth = 8;
   uint64_t max_memory = 1ull << 30;  // all trees of all levels together; exceeded: PfdBudgetError

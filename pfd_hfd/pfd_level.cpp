@@ -2,11 +2,17 @@
 // into view cells with a tree each; the sizes that make this necessary are in "Sizes and
 // errors"). Cells are chosen before anything is built: a tree's size grows with
 // the square of the test-lines that cross its region (nodes ≈ 0.25–0.34·L²), so a cell is cut in
-// four while that estimate exceeds the per-cell budget. A cell whose build still passes the budget
-// is abandoned at once (the builder checks after every node) and cut again. The cells of a level
+// four while that estimate exceeds the per-cell budget. An HFD tree does not grow that way: a
+// hidden subtree gets no test-line, so its size follows what the region sees, and the estimate
+// is off by orders of magnitude on large levels (docs/hfd/README.md, "View cells"), while every
+// cell tests every fragment of the level at its root again. An HFD level therefore starts as one
+// cell. A cell whose build still passes the budget is abandoned at once (the builder checks
+// after every node) and cut again. The cells of a level
 // (and, through buildPfdLevels, the levels) are built in parallel (TBB); the result does not
 // depend on thread order.
 #include <atomic>
+#include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -23,9 +29,8 @@ namespace {
 // Bytes per crossing line squared: about 0.3·L² nodes of about 200 bytes each (node, list
 // references, pooled runs and the build's memo), measured on gen:office and freedoom2 maps.
 constexpr double kBytesPerLineSquared = 60.0;
-// Hidden-subtree pruning shrinks trees 5–30× in nodes (docs/DESIGN.md, "Sizes and errors"): HFD
-// cells are planned larger.
-constexpr double kHfdShrink = 8.0;
+// Progress lines of a cell's build come at most this often.
+constexpr double kProgressSeconds = 10.0;
 
 struct PlannedCell {
   std::optional<PfdBox> box;  // none: the whole level
@@ -74,7 +79,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     q.push_back({PfdBox{{b.lo.x, mz}, {mx, b.hi.y}}, c.depth + 1});
     q.push_back({PfdBox{{mx, mz}, {b.hi.x, b.hi.y}}, c.depth + 1});
   };
-  const double per_line2 = kBytesPerLineSquared / (options.tree.visibility ? kHfdShrink : 1.0);
+  const bool hfd = options.tree.visibility != nullptr;
   PfdOptions tree_options = options.tree;
   if (options.object_extent > 0.0) tree_options.object_extent = options.object_extent * eye_height;
   if (!tree_options.drop_back_faces) tree_options.object_extent = 0.0;
@@ -90,8 +95,8 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
       stack.pop_back();
       const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box, objects);
       if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
-      const double estimate = per_line2 * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
-      if (options.cell_memory != 0 && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
+      const double estimate = kBytesPerLineSquared * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
+      if (!hfd && options.cell_memory != 0 && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
       else q.clear();
       if (q.empty()) {
         planned.push_back(c);
@@ -123,11 +128,23 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
         o.max_memory = remaining;
         total_limited[i] = 1;
       }
+      const std::string cell_name = where + ": cell " + std::to_string(i) + "/" + std::to_string(planned.size());
+      const auto start = std::chrono::steady_clock::now();
+      double last_report = 0.0;
+      o.progress = [&](double done) {
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (elapsed - last_report < kProgressSeconds || !(done > 0.0) || done >= 1.0) return;
+        last_report = elapsed;
+        char line[160];
+        std::snprintf(line, sizeof line, ": %.1f%% of its area after %.0f s, about %.0f s to go (ETA by area)",
+                      100.0 * done, elapsed, elapsed * (1.0 - done) / done);
+        say(cell_name + line);
+      };
       try {
         PfdTree tree = buildPfd(bsp, level.walkable, out.height, planned[i].box, o);
         const uint64_t after = used.fetch_add(tree.stats.bytes) + tree.stats.bytes;
         if (options.max_memory != 0 && after > options.max_memory) throw totalError();
-        say(where + ": cell " + std::to_string(i) + "/" + std::to_string(planned.size()) + ": " +
+        say(cell_name + ": " +
             std::to_string(tree.stats.nodes) + " nodes, " + std::to_string(tree.stats.list_entries) + " list entries, " +
             std::to_string(tree.stats.pool_entries) + " pooled ids, " + std::to_string(tree.stats.bytes) + " bytes, " +
             std::to_string(tree.stats.build_seconds) + " s");

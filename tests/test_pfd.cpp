@@ -292,6 +292,50 @@ TEST(Pfd, ViewCellsCoverTheLevel) {
   EXPECT_GT(checked, 1900u);
 }
 
+// An HFD level is one view cell unless its tree passes the per-cell budget (the PFD estimate of
+// crossing lines squared is no guide to a tree that hidden subtrees prune); then it is cut, and
+// the cells still cover the level, each within the budget, with progress reported by area.
+TEST(Pfd, HfdLevelIsOneCellUntilItsTreePassesTheBudget) {
+  const Scene scene = randomBuilding(11, 12, 1.5);
+  const BspTree bsp = buildBsp(scene);
+  const VisibilityScene vis = VisibilityScene::build(bsp);
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 200;
+  options.tree.visibility = &vis;
+  options.max_cell_depth = 4;
+  uint64_t used = 0;
+  const PfdLevel whole = buildPfdLevel(bsp, scene.levels[0], 0, scene.eye_height, options, used);
+  ASSERT_EQ(whole.cells.size(), 1u);
+  // The PFD plan cuts this level at this budget (ViewCellsCoverTheLevel); the HFD build passes it
+  // while it builds (its bytes then include the build's memo).
+  options.cell_memory = 8000;
+  std::vector<std::string> lines;
+  used = 0;
+  const PfdLevel cut = buildPfdLevel(bsp, scene.levels[0], 0, scene.eye_height, options, used,
+                                     [&](const std::string& line) { lines.push_back(line); });
+  EXPECT_GT(cut.cells.size(), 1u);
+  double area = 0.0;
+  for (const PfdTree& t : cut.cells) {
+    area += t.stats.region_area;
+    EXPECT_LE(t.stats.bytes, options.cell_memory);
+  }
+  EXPECT_NEAR(area, whole.cells[0].stats.region_area, 1e-6);
+  EXPECT_FALSE(std::any_of(lines.begin(), lines.end(),
+                           [](const std::string& l) { return l.find("view cells planned") != std::string::npos; }))
+      << "an HFD level is not planned into cells";
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(),
+                          [](const std::string& l) { return l.find("cut into 4") != std::string::npos; }));
+  // The builder's progress: the area its finished leaves cover, rising to the whole region.
+  std::vector<double> done;
+  PfdOptions o = options.tree;
+  o.progress = [&](double f) { done.push_back(f); };
+  const PfdTree tree = buildPfd(bsp, scene.levels[0].walkable, whole.height, std::nullopt, o);
+  ASSERT_EQ(done.size(), tree.stats.leaves);
+  EXPECT_TRUE(std::is_sorted(done.begin(), done.end()));
+  EXPECT_GT(done.front(), 0.0);
+  EXPECT_NEAR(done.back(), 1.0, 1e-9);
+}
+
 TEST(Pfd, BudgetIsAClearError) {
   const Scene scene = randomBuilding(2, 14, 1.5);
   const BspTree bsp = buildBsp(scene);

@@ -405,7 +405,7 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
       ->delimiter(',');
   sub->add_option("--max-memory", args->max_memory, "Budget for all trees together (e.g. 512M, 2G; default 1G)");
   sub->add_option("--cell-memory", args->cell_memory,
-                  "A tree over this many bytes is cut into four view cells (default 64M; 0: never)");
+                  "A tree over this many bytes is cut into four view cells (default 64M; 0: never). PFD levels are planned into cells by an estimate first; an HFD level starts as one cell");
   sub->add_option("--heuristic", args->heuristic, "Which undecided test-line first: balanced or traversal");
   sub->add_option("--object-extent", args->object_extent,
                   "Detail objects: BSP subtrees whose fragments fit in a box of this many eye heights are listed "

@@ -509,8 +509,6 @@ class Builder {
   }
 
   void run(Region region) {
-    root_area_ = 0.0;
-    for (const Piece& p : region) root_area_ += pieceArea(p);
     std::vector<Item> stack;
     if (bsp_.root >= 0) stack.push_back({bsp_.root, 0});
     build(std::move(region), std::move(stack), 1);
@@ -529,7 +527,7 @@ class Builder {
 
  private:
   static constexpr int8_t kUnknown = 5;
-  double root_area_ = 0.0, done_area_ = 0.0;  // for options_.progress
+  double done_area_ = 0.0;  // leaves built, for options_.progress (against out_.stats.region_area)
 
   bool hfd() const { return options_.visibility != nullptr; }
 
@@ -1558,7 +1556,8 @@ class Builder {
       for (const Piece& p : r) area += pieceArea(p);
       leaf_areas.push_back(area);
       done_area_ += area;
-      if (options_.progress && root_area_ > 0.0) options_.progress(std::min(1.0, done_area_ / root_area_));
+      if (options_.progress && out_.stats.region_area > 0.0)
+        options_.progress(std::min(1.0, done_area_ / out_.stats.region_area));
       // Every tested line that bounds the leaf was tested on its path: a lower bound of its depth
       // that no order of the tests can beat (PfdStats::tests_cell_bound).
       uint32_t bounding = 0;

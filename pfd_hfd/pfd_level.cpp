@@ -1,15 +1,14 @@
 // One level's PFD trees and its view cells (docs/DESIGN.md, "Height plane": a large level is cut
 // into view cells with a tree each; the sizes that make this necessary are in "Sizes and
-// errors"). Cells are chosen before anything is built: a tree's size grows with
+// errors"). A PFD level's cells are chosen before anything is built: a PFD tree's size grows with
 // the square of the test-lines that cross its region (nodes ≈ 0.25–0.34·L²), so a cell is cut in
-// four while that estimate exceeds the per-cell budget. An HFD tree does not grow that way: a
-// hidden subtree gets no test-line, so its size follows what the region sees, and the estimate
-// is off by orders of magnitude on large levels (docs/hfd/README.md, "View cells"), while every
-// cell tests every fragment of the level at its root again. An HFD level therefore starts as one
-// cell. A cell whose build still passes the budget is abandoned at once (the builder checks
-// after every node) and cut again. The cells of a level
-// (and, through buildPfdLevels, the levels) are built in parallel (TBB); the result does not
-// depend on thread order.
+// four while that estimate exceeds the per-cell budget. An HFD tree does not grow that way (a
+// hidden subtree gets no test-line, so its size follows what the region sees; the estimate is off
+// by orders of magnitude on large levels, docs/hfd/README.md, "View cells"), while every cell
+// tests every fragment of the level at its root again: an HFD level starts as one cell. Either
+// way, a cell whose build passes the budget is abandoned at once (the builder checks after every
+// node) and cut again. The cells of a level (and, through buildPfdLevels, the levels) are built in
+// parallel (TBB); the result does not depend on thread order.
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -79,7 +78,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     q.push_back({PfdBox{{b.lo.x, mz}, {mx, b.hi.y}}, c.depth + 1});
     q.push_back({PfdBox{{mx, mz}, {b.hi.x, b.hi.y}}, c.depth + 1});
   };
-  const bool hfd = options.tree.visibility != nullptr;
+  const bool plan_by_lines = options.tree.visibility == nullptr && options.cell_memory != 0;  // PFD only
   PfdOptions tree_options = options.tree;
   if (options.object_extent > 0.0) tree_options.object_extent = options.object_extent * eye_height;
   if (!tree_options.drop_back_faces) tree_options.object_extent = 0.0;
@@ -96,7 +95,7 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
       const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box, objects);
       if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
       const double estimate = kBytesPerLineSquared * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
-      if (!hfd && options.cell_memory != 0 && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
+      if (plan_by_lines && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
       else q.clear();
       if (q.empty()) {
         planned.push_back(c);

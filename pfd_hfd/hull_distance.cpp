@@ -87,6 +87,9 @@ glm::dvec3 nearestOnSimplex(glm::dvec3* s, int& n) {
 
 bool hullsSeparated(std::span<const glm::dvec3> a, std::span<const glm::dvec3> b, double margin) {
   assert(!a.empty() && !b.empty());
+  // An axis-aligned plane first: it settles most of the proof's queries (a patch edge against the
+  // thin hull of one sub-cone) at a fraction of one GJK step.
+  if (boxesSeparated(boundsOf(a), boundsOf(b), margin)) return true;
   glm::dvec3 simplex[4];
   int n = 0;
   glm::dvec3 v = a[0] - b[0];

@@ -145,6 +145,21 @@ bool clipHalfPlane(const std::vector<glm::dvec2>& poly, const glm::dvec2& g, dou
   return out.size() >= 3;
 }
 
+// True when the piece's bounding circle lies wholly where g·q + c0 < 0, so that clipping it
+// to the half-plane leaves nothing (the factor: the bound's rounding, ~1e-16 relative, never
+// skips a piece that clipping would keep).
+bool circleBehind(const Convex2& piece, const glm::dvec2& g, double c0) {
+  return glm::dot(g, piece.centroid) + c0 < -piece.radius * glm::length(g) * (1.0 + 1e-9);
+}
+
+// True when the rectangle lo..hi lies wholly where g·q + c0 < 0 (with the factor of
+// circleBehind), so that no piece part inside it is kept by the half-plane.
+bool rectBehind(const glm::dvec2& lo, const glm::dvec2& hi, const glm::dvec2& g, double c0) {
+  const double top = std::max(g.x * lo.x, g.x * hi.x) + std::max(g.y * lo.y, g.y * hi.y) + c0;
+  return top < -1e-9 * (std::abs(g.x) * std::max(std::abs(lo.x), std::abs(hi.x)) +
+                        std::abs(g.y) * std::max(std::abs(lo.y), std::abs(hi.y)) + std::abs(c0));
+}
+
 // Pulls p towards c by `gap` (absolute) and at least the fraction `shrink`, but never past c.
 glm::dvec2 pullTowards(const glm::dvec2& p, const glm::dvec2& c, double shrink, double gap) {
   const double len = glm::length(p - c);
@@ -161,25 +176,135 @@ double diameter2(std::span<const glm::dvec2> v) {
   return d;
 }
 
+// A uniform grid over the bounding boxes of a region's pieces, so that a nearest-point query
+// looks at the pieces near the point instead of all of them: the region of a whole level has
+// thousands of pieces, and the refinement asks for a nearest eye at every step.
+struct PieceGrid {
+  glm::dvec2 lo{0.0};
+  double cell_w = 1.0, cell_h = 1.0;
+  int nx = 0, ny = 0;  // 0: no grid (few pieces), queries scan every piece
+  std::vector<uint32_t> first, items;  // cell c holds pieces items[first[c], first[c + 1])
+  std::vector<uint32_t> seen;          // per piece, the query that looked at it last
+  uint32_t query = 0;
+
+  void build(std::span<const Convex2> pieces) {
+    nx = ny = 0;
+    if (pieces.size() < kMinPieces) return;
+    glm::dvec2 hi = pieces[0].v[0];
+    lo = hi;
+    for (const Convex2& p : pieces)
+      for (const glm::dvec2& v : p.v) lo = glm::min(lo, v), hi = glm::max(hi, v);
+    const glm::dvec2 size = glm::max(hi - lo, glm::dvec2(1e-300));
+    // About one cell per piece, shaped like the region's box.
+    const double n = static_cast<double>(pieces.size());
+    nx = std::clamp(static_cast<int>(std::sqrt(n * size.x / size.y)), 1, 1024);
+    ny = std::clamp(static_cast<int>(n / nx), 1, 1024);
+    cell_w = size.x / nx, cell_h = size.y / ny;
+    first.assign(static_cast<size_t>(nx) * ny + 1, 0);
+    for (int pass = 0; pass < 2; ++pass) {
+      for (uint32_t i = 0; i < pieces.size(); ++i) {
+        int x0, x1, y0, y1;
+        cellsOf(pieces[i], x0, x1, y0, y1);
+        for (int y = y0; y <= y1; ++y)
+          for (int x = x0; x <= x1; ++x) {
+            const size_t c = static_cast<size_t>(y) * nx + x;
+            if (pass == 0) ++first[c + 1];
+            else items[first[c]++] = i;
+          }
+      }
+      if (pass == 0) {
+        for (size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
+        items.assign(first.back(), 0);
+      } else {  // the fill advanced each cell's start to the next one's: shift back
+        for (size_t c = first.size() - 1; c > 0; --c) first[c] = first[c - 1];
+        first[0] = 0;
+      }
+    }
+    seen.assign(pieces.size(), 0);
+    query = 0;
+  }
+  int cellX(double x) const { return std::clamp(static_cast<int>(std::floor((x - lo.x) / cell_w)), 0, nx - 1); }
+  int cellY(double y) const { return std::clamp(static_cast<int>(std::floor((y - lo.y) / cell_h)), 0, ny - 1); }
+  void cellsOf(const Convex2& p, int& x0, int& x1, int& y0, int& y1) const {
+    glm::dvec2 plo = p.v[0], phi = p.v[0];
+    for (const glm::dvec2& v : p.v) plo = glm::min(plo, v), phi = glm::max(phi, v);
+    x0 = cellX(plo.x), x1 = cellX(phi.x), y0 = cellY(plo.y), y1 = cellY(phi.y);
+  }
+  static constexpr size_t kMinPieces = 32;
+};
+
 // The point of the convex pieces nearest to `want`, pulled `inset` towards its piece's centroid;
 // with a half-plane g·q + c0 >= 0 (`g` non-null), only the part of each piece inside it (`clip`
-// is scratch). nullopt when no piece has such a part.
+// is scratch). nullopt when no piece has such a part. `grid` (built over these pieces, or
+// without cells) only limits which pieces are looked at: the answer is the nearest all the same
+// (a tie between pieces may fall to another of them).
 std::optional<glm::dvec2> nearestInPieces(std::span<const Convex2> pieces, const glm::dvec2& want, double inset,
-                                          const glm::dvec2* g, double c0, std::vector<glm::dvec2>& clip) {
+                                          const glm::dvec2* g, double c0, std::vector<glm::dvec2>& clip,
+                                          PieceGrid& grid) {
   double best = std::numeric_limits<double>::infinity();
   std::optional<glm::dvec2> out;
-  for (const Convex2& piece : pieces) {
+  auto consider = [&](const Convex2& piece) {
     // A piece whose bounding circle lies farther than the best point so far cannot hold a nearer
-    // one (regions of a Freedoom level have hundreds of pieces). The factor keeps the rounding of
-    // the bound (~1e-16 relative) from skipping a piece that ties.
+    // one. The factor keeps the rounding of the bound (~1e-16 relative) from skipping a piece
+    // that ties.
     const double lower = glm::length(want - piece.centroid) - piece.radius;
-    if (lower > 0.0 && lower * lower > best * (1.0 + 1e-9)) continue;
-    if (g && !clipHalfPlane(piece.v, *g, c0, clip)) continue;
+    if (lower > 0.0 && lower * lower > best * (1.0 + 1e-9)) return;
+    if (g && circleBehind(piece, *g, c0)) return;
+    if (g && !clipHalfPlane(piece.v, *g, c0, clip)) return;
     double d2;
     const glm::dvec2 c = closestInConvex(g ? clip : piece.v, want, d2);
     if (d2 < best) {
       best = d2;
       out = pullTowards(c, piece.centroid, 0.0, inset);
+    }
+  };
+  if (grid.nx == 0) {
+    for (const Convex2& piece : pieces) consider(piece);
+    return out;
+  }
+  if (g && rectBehind(grid.lo, grid.lo + glm::dvec2(grid.nx * grid.cell_w, grid.ny * grid.cell_h), *g, c0))
+    return out;
+  // Rings of cells around want's cell, nearest first. The nearest point of a piece lies in a
+  // cell its box covers, where the piece is listed, so a cell farther than the best point so far
+  // holds nothing nearer, and once every cell left lies outside a box of cells whose inside is
+  // farther from want than the best point, so does the rest.
+  if (++grid.query == 0) std::fill(grid.seen.begin(), grid.seen.end(), 0u), grid.query = 1;
+  const int cx = grid.cellX(want.x), cy = grid.cellY(want.y);
+  const double inf = std::numeric_limits<double>::infinity();
+  const int rings = std::max({cx, grid.nx - 1 - cx, cy, grid.ny - 1 - cy});
+  auto farther = [&](double d) { return d > 0.0 && d * d > best * (1.0 + 1e-9); };
+  for (int k = 0; k <= rings; ++k) {
+    if (k > 0) {
+      // The cells of ring k lie beyond the box of rings 0..k-1, on the sides where it ends
+      // before the grid does.
+      const double x0 = grid.lo.x + (cx - k + 1) * grid.cell_w, x1 = grid.lo.x + (cx + k) * grid.cell_w;
+      const double y0 = grid.lo.y + (cy - k + 1) * grid.cell_h, y1 = grid.lo.y + (cy + k) * grid.cell_h;
+      if (want.x >= x0 && want.x <= x1 && want.y >= y0 && want.y <= y1) {
+        const double d = std::min({cx - k + 1 > 0 ? want.x - x0 : inf, cx + k < grid.nx ? x1 - want.x : inf,
+                                   cy - k + 1 > 0 ? want.y - y0 : inf, cy + k < grid.ny ? y1 - want.y : inf});
+        if (farther(d)) break;
+      }
+    }
+    for (int y = std::max(0, cy - k); y <= std::min(grid.ny - 1, cy + k); ++y) {
+      const bool edge_row = y == cy - k || y == cy + k;  // a whole row of ring k, else its two ends
+      for (int x = std::max(0, cx - k); x <= std::min(grid.nx - 1, cx + k); ++x) {
+        if (!edge_row && x != cx - k && x != cx + k) {
+          if (x < cx + k) x = cx + k - 1;  // on to the right end
+          continue;
+        }
+        const glm::dvec2 c_lo = grid.lo + glm::dvec2(x * grid.cell_w, y * grid.cell_h);
+        const glm::dvec2 gap = glm::max(glm::max(c_lo - want, want - (c_lo + glm::dvec2(grid.cell_w, grid.cell_h))),
+                                        glm::dvec2(0.0));
+        if (farther(glm::length(gap))) continue;
+        if (g && rectBehind(c_lo, c_lo + glm::dvec2(grid.cell_w, grid.cell_h), *g, c0)) continue;
+        const size_t c = static_cast<size_t>(y) * grid.nx + x;
+        for (uint32_t i = grid.first[c]; i < grid.first[c + 1]; ++i) {
+          const uint32_t piece = grid.items[i];
+          if (grid.seen[piece] == grid.query) continue;
+          grid.seen[piece] = grid.query;
+          consider(pieces[piece]);
+        }
+      }
     }
   }
   return out;
@@ -353,6 +478,12 @@ struct ProofItem {
 
 // Per-thread working memory, reused across queries so that a warm thread allocates nothing.
 struct Scratch {
+  // The region of the last query and what was made of it (a batch asks many targets from one
+  // region): its rings as given, and the pieces, their area, perimeter and grid.
+  std::vector<glm::dvec2> region_flat;
+  std::vector<uint32_t> region_sizes;
+  double region_area = 0.0, perimeter = 0.0;
+  PieceGrid grid;
   std::vector<Convex2> pieces;
   std::vector<double> piece_cum;
   std::vector<double> tri_cum;
@@ -379,6 +510,36 @@ struct Scratch {
   std::vector<double> breaks;
   std::vector<glm::dvec2> spans;  // partner edges in the patch, as (start, end) along an edge
 };
+
+// The region's convex pieces, counter-clockwise, zero-area ones dropped, with their total area
+// and perimeter and the grid over them, into sc.
+void buildPieces(std::span<const std::vector<glm::dvec2>> region, Scratch& sc) {
+  sc.pieces.clear();
+  double region_area = 0.0, perimeter = 0.0;
+  for (const auto& piece : region) {
+    if (piece.size() < 3) continue;
+    double a2 = 0.0;
+    glm::dvec2 c{0.0};
+    for (size_t i = 0; i < piece.size(); ++i) {
+      const double cr = cross2(piece[i], piece[(i + 1) % piece.size()]);
+      a2 += cr;
+      c += (piece[i] + piece[(i + 1) % piece.size()]) * cr;
+    }
+    if (!(std::abs(a2) > 0.0) || !std::isfinite(a2)) continue;
+    Convex2 cp;
+    cp.v = piece;
+    if (a2 < 0.0) std::reverse(cp.v.begin(), cp.v.end());
+    cp.area = 0.5 * std::abs(a2);
+    cp.centroid = c / (3.0 * a2);
+    for (const auto& v : cp.v) cp.radius = std::max(cp.radius, glm::length(v - cp.centroid));
+    for (size_t i = 0; i < cp.v.size(); ++i) perimeter += glm::length(cp.v[(i + 1) % cp.v.size()] - cp.v[i]);
+    region_area += cp.area;
+    sc.pieces.push_back(std::move(cp));
+  }
+  sc.region_area = region_area;
+  sc.perimeter = perimeter;
+  sc.grid.build(sc.pieces);
+}
 
 Scratch& scratch() {
   thread_local Scratch s;
@@ -509,6 +670,7 @@ struct VisibilityScene::Impl {
     const uint32_t stamp = sc.patch_stamp;
     sc.hull3.assign(region3.begin(), region3.end());
     sc.hull3.insert(sc.hull3.end(), target3.begin(), target3.end());
+    const Box3 hull_box = boundsOf(sc.hull3);
     sc.patch.clear();
     sc.patch_edges.clear();
     auto add = [&](uint32_t o) {
@@ -551,6 +713,7 @@ struct VisibilityScene::Impl {
           if (std::min(sp.x, sp.y) <= mid && mid <= std::max(sp.x, sp.y)) net += sp.y < sp.x ? -1 : 1;
         if (net == 0) continue;
         const glm::dvec3 piece[2] = {a + t0 * u, a + t1 * u};
+        if (boxesSeparated(boundsOf(piece), hull_box, margin)) continue;
         open = !hullsSeparated(piece, sc.hull3, margin);
       }
       if (!open) continue;  // every boundary stretch here is clear of every segment
@@ -569,9 +732,12 @@ struct VisibilityScene::Impl {
     }
     // The ends: eyes off the patch by the margin, target points by the end gap (the rays stop that
     // far short of the target's plane; a crossing nearer would not be cast).
+    const Box3 region_box = boundsOf(region3), target_box = boundsOf(target3);
     for (uint32_t o : sc.patch) {
       const std::span<const glm::dvec3> ov(outline_vertices.data() + outline_first[o], outline_first[o + 1] - outline_first[o]);
-      if (!hullsSeparated(ov, region3, margin) || !hullsSeparated(ov, target3, end_gap)) return false;
+      const Box3 outline_box = boundsOf(ov);
+      if (!boxesSeparated(outline_box, region_box, margin) && !hullsSeparated(ov, region3, margin)) return false;
+      if (!boxesSeparated(outline_box, target_box, end_gap) && !hullsSeparated(ov, target3, end_gap)) return false;
     }
     // One segment's count: centroid to centroid, or when that one passes too near an edge of the
     // patch to count in double precision (a symmetric scene puts it on a shared edge), a segment
@@ -879,29 +1045,22 @@ bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const s
   }
   uint64_t rng = h;
 
-  // Region pieces, counter-clockwise, zero-area ones dropped.
-  sc.pieces.clear();
-  double region_area = 0.0, perimeter = 0.0;
-  for (const auto& piece : region) {
-    if (piece.size() < 3) continue;
-    double a2 = 0.0;
-    glm::dvec2 c{0.0};
-    for (size_t i = 0; i < piece.size(); ++i) {
-      const double cr = cross2(piece[i], piece[(i + 1) % piece.size()]);
-      a2 += cr;
-      c += (piece[i] + piece[(i + 1) % piece.size()]) * cr;
+  // Region pieces, counter-clockwise, zero-area ones dropped: made again only when the region
+  // differs from the last query's on this thread.
+  bool same_region = sc.region_sizes.size() == region.size();
+  for (size_t i = 0, at = 0; same_region && i < region.size(); at += region[i].size(), ++i)
+    same_region = sc.region_sizes[i] == region[i].size() && at + region[i].size() <= sc.region_flat.size() &&
+                  std::equal(region[i].begin(), region[i].end(), sc.region_flat.begin() + static_cast<std::ptrdiff_t>(at));
+  if (!same_region) {
+    sc.region_sizes.clear();
+    sc.region_flat.clear();
+    for (const auto& piece : region) {
+      sc.region_sizes.push_back(static_cast<uint32_t>(piece.size()));
+      sc.region_flat.insert(sc.region_flat.end(), piece.begin(), piece.end());
     }
-    if (!(std::abs(a2) > 0.0) || !std::isfinite(a2)) continue;
-    Convex2 cp;
-    cp.v = piece;
-    if (a2 < 0.0) std::reverse(cp.v.begin(), cp.v.end());
-    cp.area = 0.5 * std::abs(a2);
-    cp.centroid = c / (3.0 * a2);
-    for (const auto& v : cp.v) cp.radius = std::max(cp.radius, glm::length(v - cp.centroid));
-    for (size_t i = 0; i < cp.v.size(); ++i) perimeter += glm::length(cp.v[(i + 1) % cp.v.size()] - cp.v[i]);
-    region_area += cp.area;
-    sc.pieces.push_back(std::move(cp));
+    buildPieces(region, sc);
   }
+  const double region_area = sc.region_area, perimeter = sc.perimeter;
   if (sc.pieces.empty()) return false;
   auto eyeAt = [&](const glm::dvec2& p) { return glm::dvec3(p.x, height, p.y); };
 
@@ -1007,8 +1166,13 @@ bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const s
     // Only the part of each piece in front of the target (by the minimum gap) casts rays.
     const glm::dvec2 g{tp.n.x, tp.n.z};
     const double c0 = tp.n.y * height - tp.d - min_gap;
+    // Each item costs at least one ray of the budget, so with more items than rays the proof
+    // cannot finish: stop before shrinking the rest (a region of a whole level has thousands of
+    // pieces, and shrinking them was most of a test's time there).
+    const uint32_t max_items = opt.conservative ? std::max(opt.proof_rays, opt.conservative_proof_rays) : opt.proof_rays;
     for (const auto& piece : sc.pieces) {
-      if (!clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
+      if (sc.items.size() > max_items) return 0;
+      if (circleBehind(piece, g, c0) || !clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
       // Shrunk by four times the eye margin of the covers (a patch's separating plane keeps the
       // margin on both sides, so twice it from the eyes): region edges usually lie on walls, and an
       // eye on a wall's plane (or at a room's corner) crosses it nowhere inside its outline. No
@@ -1031,7 +1195,7 @@ bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const s
       sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
       sc.items.push_back({first, static_cast<uint32_t>(sc.clip.size()), t_first, t_count, 0});
     }
-    uint32_t budget = opt.conservative ? std::max(opt.proof_rays, opt.conservative_proof_rays) : opt.proof_rays;
+    uint32_t budget = max_items;
     auto centroidOf = [&](uint32_t first, uint32_t count) {
       glm::dvec2 c{0.0};
       for (uint32_t k = 0; k < count; ++k) c += sc.pool[first + k];
@@ -1169,7 +1333,7 @@ bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const s
         const glm::dvec2 q = k == 0 ? tc : pointInConvex(target_c, uniform01(rng), uniform01(rng), sc.tri_cum);
         const glm::dvec3 in_front = target3(q) + tp.n * (diameter * (k + uniform01(rng)) / n_near);
         const std::optional<glm::dvec2> eye2 =
-            nearestInPieces(sc.pieces, {in_front.x, in_front.z}, region_inset, nullptr, 0.0, sc.clip);
+            nearestInPieces(sc.pieces, {in_front.x, in_front.z}, region_inset, nullptr, 0.0, sc.clip, sc.grid);
         sc.eyes.push_back(eyeAt(eye2.value_or(glm::dvec2(0.0))));
       }
     }
@@ -1322,7 +1486,7 @@ bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const s
     const double offset = margin * glm::length(dir) / to_hit;
     const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
     const double c0 = sgn * (mn.y * (height - a.y) - mn.x * a.x - mn.z * a.z) - offset;
-    const std::optional<glm::dvec2> e2 = nearestInPieces(sc.pieces, {pa.eye.x, pa.eye.z}, region_inset, &g, c0, sc.clip);
+    const std::optional<glm::dvec2> e2 = nearestInPieces(sc.pieces, {pa.eye.x, pa.eye.z}, region_inset, &g, c0, sc.clip, sc.grid);
     if (!e2) return false;
     const glm::dvec3 e3 = eyeAt(*e2);
     if (!(glm::length(e3 - pa.eye) > end_gap)) return false;

@@ -83,8 +83,8 @@ void PieceGrid::build(std::span<const Convex2> pieces) {
   const glm::dvec2 size = glm::max(hi - lo, glm::dvec2(1e-300));
   // About one cell per piece, shaped like the region's box.
   const double n = static_cast<double>(pieces.size());
-  nx = std::clamp(static_cast<int>(std::sqrt(n * size.x / size.y)), 1, 1024);
-  ny = std::clamp(static_cast<int>(n / nx), 1, 1024);
+  nx = static_cast<int>(std::clamp(std::sqrt(n * size.x / size.y), 1.0, 1024.0));
+  ny = static_cast<int>(std::clamp(n / nx, 1.0, 1024.0));
   cell_w = size.x / nx, cell_h = size.y / ny;
   first.assign(static_cast<size_t>(nx) * ny + 1, 0);
   for (int pass = 0; pass < 2; ++pass) {

@@ -66,8 +66,13 @@ struct PieceGrid {
   // About one cell per piece, shaped like the pieces' bounding box; no cells for fewer than
   // kMinPieces. Every piece is listed in each cell its bounding box meets.
   void build(std::span<const Convex2> pieces);
-  int cellX(double x) const { return std::clamp(static_cast<int>(std::floor((x - lo.x) / cell_w)), 0, nx - 1); }
-  int cellY(double y) const { return std::clamp(static_cast<int>(std::floor((y - lo.y) / cell_h)), 0, ny - 1); }
+  // The cell column (row) of x (y), clamped to the grid; clamped before the conversion, since a
+  // point far outside (or NaN) would not fit an int.
+  int cellX(double x) const { return cellOf((x - lo.x) / cell_w, nx); }
+  int cellY(double y) const { return cellOf((y - lo.y) / cell_h, ny); }
+  static int cellOf(double t, int n) {
+    return t >= 0.0 ? static_cast<int>(std::min(std::floor(t), static_cast<double>(n - 1))) : 0;
+  }
 };
 
 // The point of the convex pieces nearest to `want`, pulled `inset` towards its piece's centroid;

@@ -8,10 +8,29 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 namespace walkvis {
 namespace {
+
+struct Box3 {
+  glm::dvec3 lo, hi;
+};
+
+Box3 boundsOf(std::span<const glm::dvec3> points) {
+  Box3 box{points[0], points[0]};
+  for (const auto& p : points) box.lo = glm::min(box.lo, p), box.hi = glm::max(box.hi, p);
+  return box;
+}
+
+// True when an axis-aligned plane has all of box a on one side and all of b on the other, each at
+// least `margin` from it: a certificate for whatever the boxes bound.
+bool boxesSeparated(const Box3& a, const Box3& b, double margin) {
+  for (int k = 0; k < 3; ++k)
+    if (b.lo[k] - a.hi[k] > 2.0 * margin || a.lo[k] - b.hi[k] > 2.0 * margin) return true;
+  return false;
+}
 
 // Solves the m x m system (m <= 3) in place by Gaussian elimination with partial pivoting; false
 // when a pivot is negligible against the matrix's scale (a degenerate face, skipped by the caller).

@@ -7,28 +7,9 @@
 
 #include <span>
 
-#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
 namespace walkvis {
-
-// Axis-aligned bounds of a point set (non-empty).
-struct Box3 {
-  glm::dvec3 lo, hi;
-};
-inline Box3 boundsOf(std::span<const glm::dvec3> points) {
-  Box3 box{points[0], points[0]};
-  for (const auto& p : points) box.lo = glm::min(box.lo, p), box.hi = glm::max(box.hi, p);
-  return box;
-}
-
-// True when an axis-aligned plane has all of box a on one side and all of b on the other, each at
-// least `margin` from it: a certificate of hullsSeparated for anything the boxes bound.
-inline bool boxesSeparated(const Box3& a, const Box3& b, double margin) {
-  for (int k = 0; k < 3; ++k)
-    if (b.lo[k] - a.hi[k] > 2.0 * margin || a.lo[k] - b.hi[k] > 2.0 * margin) return true;
-  return false;
-}
 
 // True only when a plane is found that has every point of `a` on one side and every point of `b`
 // on the other, each at least `margin` from it (so the hulls are more than 2 * margin apart, and

@@ -145,6 +145,19 @@ std::optional<glm::dvec2> nearestInPieces(std::span<const Convex2> pieces, const
   const double inf = std::numeric_limits<double>::infinity();
   const int rings = std::max({cx, grid.nx - 1 - cx, cy, grid.ny - 1 - cy});
   auto farther = [&](double d) { return d > 0.0 && d * d > best * (1.0 + 1e-9); };
+  const glm::dvec2 cell{grid.cell_w, grid.cell_h};
+  auto visit = [&](int x, int y) {
+    const glm::dvec2 c_lo = grid.lo + glm::dvec2(x, y) * cell;
+    if (farther(glm::length(glm::max(glm::max(c_lo - want, want - (c_lo + cell)), glm::dvec2(0.0))))) return;
+    if (g && rectBehind(c_lo, c_lo + cell, *g, c0)) return;
+    const size_t c = static_cast<size_t>(y) * grid.nx + x;
+    for (uint32_t i = grid.first[c]; i < grid.first[c + 1]; ++i) {
+      const uint32_t piece = grid.items[i];
+      if (grid.seen[piece] == grid.query) continue;
+      grid.seen[piece] = grid.query;
+      consider(pieces[piece]);
+    }
+  };
   for (int k = 0; k <= rings; ++k) {
     if (k > 0) {
       // The cells of ring k lie beyond the box of rings 0..k-1, on the sides where it ends
@@ -158,24 +171,11 @@ std::optional<glm::dvec2> nearestInPieces(std::span<const Convex2> pieces, const
       }
     }
     for (int y = std::max(0, cy - k); y <= std::min(grid.ny - 1, cy + k); ++y) {
-      const bool edge_row = y == cy - k || y == cy + k;  // a whole row of ring k, else its two ends
-      for (int x = std::max(0, cx - k); x <= std::min(grid.nx - 1, cx + k); ++x) {
-        if (!edge_row && x != cx - k && x != cx + k) {
-          if (x < cx + k) x = cx + k - 1;  // on to the right end
-          continue;
-        }
-        const glm::dvec2 c_lo = grid.lo + glm::dvec2(x * grid.cell_w, y * grid.cell_h);
-        const glm::dvec2 gap = glm::max(glm::max(c_lo - want, want - (c_lo + glm::dvec2(grid.cell_w, grid.cell_h))),
-                                        glm::dvec2(0.0));
-        if (farther(glm::length(gap))) continue;
-        if (g && rectBehind(c_lo, c_lo + glm::dvec2(grid.cell_w, grid.cell_h), *g, c0)) continue;
-        const size_t c = static_cast<size_t>(y) * grid.nx + x;
-        for (uint32_t i = grid.first[c]; i < grid.first[c + 1]; ++i) {
-          const uint32_t piece = grid.items[i];
-          if (grid.seen[piece] == grid.query) continue;
-          grid.seen[piece] = grid.query;
-          consider(pieces[piece]);
-        }
+      if (y == cy - k || y == cy + k) {  // a whole row of ring k
+        for (int x = std::max(0, cx - k); x <= std::min(grid.nx - 1, cx + k); ++x) visit(x, y);
+      } else {  // its two ends
+        if (cx - k >= 0) visit(cx - k, y);
+        if (cx + k < grid.nx) visit(cx + k, y);
       }
     }
   }

@@ -453,7 +453,6 @@ struct VisibilityScene::Impl {
     const uint32_t stamp = sc.patch_stamp;
     sc.hull3.assign(region3.begin(), region3.end());
     sc.hull3.insert(sc.hull3.end(), target3.begin(), target3.end());
-    const Box3 hull_box = boundsOf(sc.hull3);
     sc.patch.clear();
     sc.patch_edges.clear();
     auto add = [&](uint32_t o) {
@@ -496,7 +495,6 @@ struct VisibilityScene::Impl {
           if (std::min(sp.x, sp.y) <= mid && mid <= std::max(sp.x, sp.y)) net += sp.y < sp.x ? -1 : 1;
         if (net == 0) continue;
         const glm::dvec3 piece[2] = {a + t0 * u, a + t1 * u};
-        if (boxesSeparated(boundsOf(piece), hull_box, margin)) continue;
         open = !hullsSeparated(piece, sc.hull3, margin);
       }
       if (!open) continue;  // every boundary stretch here is clear of every segment
@@ -515,12 +513,9 @@ struct VisibilityScene::Impl {
     }
     // The ends: eyes off the patch by the margin, target points by the end gap (the rays stop that
     // far short of the target's plane; a crossing nearer would not be cast).
-    const Box3 region_box = boundsOf(region3), target_box = boundsOf(target3);
     for (uint32_t o : sc.patch) {
       const std::span<const glm::dvec3> ov(outline_vertices.data() + outline_first[o], outline_first[o + 1] - outline_first[o]);
-      const Box3 outline_box = boundsOf(ov);
-      if (!boxesSeparated(outline_box, region_box, margin) && !hullsSeparated(ov, region3, margin)) return false;
-      if (!boxesSeparated(outline_box, target_box, end_gap) && !hullsSeparated(ov, target3, end_gap)) return false;
+      if (!hullsSeparated(ov, region3, margin) || !hullsSeparated(ov, target3, end_gap)) return false;
     }
     // One segment's count: centroid to centroid, or when that one passes too near an edge of the
     // patch to count in double precision (a symmetric scene puts it on a shared edge), a segment

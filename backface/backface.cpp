@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/check.h"
+
 namespace walkvis {
 
 std::string_view backfaceMethodName(BackfaceMethod method) {
@@ -22,7 +24,7 @@ BackfaceMethod parseBackfaceMethod(std::string_view name) {
                            BackfaceMethod::kCone, BackfaceMethod::kHierarchy}) {
     if (backfaceMethodName(m) == name) return m;
   }
-  throw SceneError("backface method '" + std::string(name) + "': expected polygon, mask, cluster, cone or hierarchy");
+  throw Error("backface method '" + std::string(name) + "': expected polygon, mask, cluster, cone or hierarchy");
 }
 
 std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const BackfaceInput& input,
@@ -31,10 +33,10 @@ std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const 
     const Polygon& p = input.polygons[i];
     if (!std::isfinite(p.plane.n.x) || !std::isfinite(p.plane.n.y) || !std::isfinite(p.plane.n.z) ||
         !std::isfinite(p.plane.d)) {
-      throw SceneError("backface: polygon " + std::to_string(i) + " has a non-finite plane");
+      throw Error("backface: polygon " + std::to_string(i) + " has a non-finite plane");
     }
     if (static_cast<size_t>(p.first_vertex) + p.vertex_count > input.vertices.size() || p.vertex_count < 3) {
-      throw SceneError("backface: polygon " + std::to_string(i) + " has vertices outside the vertex array");
+      throw Error("backface: polygon " + std::to_string(i) + " has vertices outside the vertex array");
     }
   }
   switch (method) {
@@ -44,11 +46,13 @@ std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const 
     case BackfaceMethod::kCone: return makeConeCuller(input, options);
     case BackfaceMethod::kHierarchy: return makeHierarchyCuller(input, options);
   }
-  throw SceneError("backface: unknown method");
+  throw Error("backface: unknown method");
 }
 
 void expandToPolygons(const BackfaceCuller& culler, std::span<const uint8_t> unit_culled,
                       std::span<uint8_t> polygon_culled) {
+  WALKVIS_DCHECK(unit_culled.size() == culler.unitCount());
+  WALKVIS_DCHECK(polygon_culled.size() == culler.polygonCount());
   std::fill(polygon_culled.begin(), polygon_culled.end(), uint8_t{0});
   const size_t units = culler.unitCount();
   // Two passes so that a polygon shared by several units (meshlets) is culled only when all are.

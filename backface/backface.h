@@ -60,7 +60,7 @@ enum class BackfaceMethod { kPolygon, kMask, kCluster, kCone, kHierarchy };
 // The widest vector instructions a per-frame pass may use (cluster's flat pass). The paths compute
 // the same results; a level the CPU lacks falls back to the widest it has (checked at build).
 enum class BackfaceSimd : uint8_t { kScalar, kSse2, kAvx2, kAuto };
-// "polygon", "mask", "cluster", "cone", "hierarchy"; parseBackfaceMethod throws SceneError for anything else.
+// "polygon", "mask", "cluster", "cone", "hierarchy"; parseBackfaceMethod throws Error for anything else.
 std::string_view backfaceMethodName(BackfaceMethod method);
 BackfaceMethod parseBackfaceMethod(std::string_view name);
 
@@ -145,7 +145,7 @@ class BackfaceCuller {
   std::vector<uint32_t> unit_polygons_;  // polygon indices; a polygon may be in several units (cone)
 };
 
-// Builds a culler. Throws SceneError when an option is out of range or a polygon has a
+// Builds a culler. Throws Error when an option is out of range or a polygon has a
 // non-finite plane.
 std::unique_ptr<BackfaceCuller> makeBackfaceCuller(BackfaceMethod method, const BackfaceInput& input,
                                                    const BackfaceOptions& options = {});
@@ -161,7 +161,7 @@ void expandToPolygons(const BackfaceCuller& culler, std::span<const uint8_t> uni
 // per-frame pass shrinks to a vanishing share while effectiveness falls behind the meshlet cones'
 // (70k sphere: 88.7% vs 89.9%); T/R ∝ 1/√n keeps the cluster count growing with the mesh (70k:
 // T/R 0.25, 1,933 clusters, 95.3% at 0.011 ns per polygon against the cones' 0.040, measured
-// `walkvis bench backface --tr 0.25`). Negative or non-finite: SceneError.
+// `walkvis bench backface --tr 0.25`). Negative or non-finite: Error.
 double clusterTrFor(size_t polygons, double requested);
 
 // Per-method builders (one file each).
@@ -176,7 +176,7 @@ std::unique_ptr<BackfaceCuller> makeHierarchyCuller(const BackfaceInput& input, 
 // meshlet of only such polygons is culled for every eye by the documented test: the library's
 // "trivial reject"), or its area is below what rounding its vertices to float can create or erase
 // (its float normal is then noise). Such a polygon has no pixels; this lets a report tell those
-// culls apart from culls of polygons that have area (meshlet_cone.cpp). Throws SceneError unless
+// culls apart from culls of polygons that have area (meshlet_cone.cpp). Throws Error unless
 // polygon_invisible.size() == input.polygons.size().
 void coneInvisiblePolygons(const BackfaceInput& input, std::span<uint8_t> polygon_invisible);
 

@@ -53,6 +53,7 @@
 
 #include "backface/backface.h"
 #include "backface/spread_bits.h"
+#include "core/check.h"
 
 namespace walkvis {
 namespace {
@@ -261,7 +262,7 @@ class ClusterCuller final : public BackfaceCuller {
  public:
   ClusterCuller(const BackfaceInput& input, const BackfaceOptions& options)
       : hierarchy_(options.cluster_hierarchy), simd_(resolveSimd(options.simd)) {
-    if (!(options.cluster_near_field > 0.0)) throw SceneError("backface cluster: cluster_near_field must be > 0");
+    if (!(options.cluster_near_field > 0.0)) throw Error("backface cluster: cluster_near_field must be > 0");
     const size_t count = input.polygons.size();
     polygon_count_ = count;
     polys_.resize(count);
@@ -292,9 +293,9 @@ class ClusterCuller final : public BackfaceCuller {
     eye_box_ = elo.x <= ehi.x && elo.y <= ehi.y && elo.z <= ehi.z;
     if (eye_box_) {
       for (int k = 0; k < 3; ++k) {
-        if (!std::isfinite(elo[k]) || !std::isfinite(ehi[k])) throw SceneError("backface cluster: the eye box is not finite");
+        if (!std::isfinite(elo[k]) || !std::isfinite(ehi[k])) throw Error("backface cluster: the eye box is not finite");
       }
-      if (elo == ehi) throw SceneError("backface cluster: the eye box is a point");
+      if (elo == ehi) throw Error("backface cluster: the eye box is a point");
       eye_lo_ = elo;
       eye_hi_ = ehi;
     }
@@ -333,6 +334,7 @@ class ClusterCuller final : public BackfaceCuller {
   }
 
   void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
+    WALKVIS_DCHECK(unit_culled.size() == unitCount());
     if (!hierarchy_) {
       cullFlat(view, unit_culled);
       return;
@@ -631,7 +633,7 @@ class ClusterCuller final : public BackfaceCuller {
 }  // namespace
 
 double clusterTrFor(size_t polygons, double requested) {
-  if (!(requested >= 0.0) || !std::isfinite(requested)) throw SceneError("backface cluster: cluster_tr must be >= 0 and finite");
+  if (!(requested >= 0.0) || !std::isfinite(requested)) throw Error("backface cluster: cluster_tr must be >= 0 and finite");
   if (requested > 0.0) return requested;
   if (polygons <= 4000) return 1.0;
   return std::max(0.25, std::sqrt(4000.0 / static_cast<double>(polygons)));

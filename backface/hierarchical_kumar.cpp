@@ -40,6 +40,8 @@
 
 #include "backface/kumar.h"
 
+#include "core/check.h"
+
 namespace walkvis {
 namespace {
 
@@ -80,7 +82,7 @@ void cubeCoords(const glm::dvec3& n, int& face, double& u, double& v) {
 
 KumarHierarchy::KumarHierarchy(const BackfaceInput& input, const KumarOptions& options) {
   if (options.leaf_size < 1 || options.top_grid < 1 || options.top_grid > 64 || !(options.jump_fraction > 0.0)) {
-    throw SceneError("backface hierarchy: leaf_size >= 1, top_grid in [1, 64] and jump_fraction > 0 required");
+    throw Error("backface hierarchy: leaf_size >= 1, top_grid in [1, 64] and jump_fraction > 0 required");
   }
   const size_t count = input.polygons.size();
   std::vector<int> face(count);
@@ -397,6 +399,7 @@ void KumarHierarchy::beginFrame() {
 }
 
 void KumarHierarchy::cull(const glm::dvec3& eye, std::span<uint8_t> leaf_culled) {
+  WALKVIS_DCHECK(leaf_culled.size() == leafCount());
   beginFrame();
   uint8_t* out = leaf_culled.data();
   const size_t count = nodes_.size();

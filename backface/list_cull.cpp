@@ -73,7 +73,7 @@ ListCullMethod parseListCullMethod(std::string_view name) {
                            ListCullMethod::kCluster, ListCullMethod::kHierarchy, ListCullMethod::kRegion}) {
     if (listCullMethodName(m) == name) return m;
   }
-  throw SceneError("backface list method '" + std::string(name) +
+  throw Error("backface list method '" + std::string(name) +
                    "': expected none, polygon, mask, cluster, hierarchy or region");
 }
 
@@ -495,26 +495,26 @@ ListCuller ListCuller::build(const BackfaceInput& input, std::span<const uint32_
   auto impl = std::make_unique<Impl>();
   impl->method = method;
   if (indices.size() > UINT32_MAX - kPad) {
-    throw SceneError("backface list: " + std::to_string(indices.size()) + " indices; positions are 32-bit");
+    throw Error("backface list: " + std::to_string(indices.size()) + " indices; positions are 32-bit");
   }
   impl->indices.assign(indices.begin(), indices.end());
   for (size_t i = 0; i < indices.size(); ++i) {
     if (indices[i] >= input.polygons.size()) {
-      throw SceneError("backface list: index " + std::to_string(i) + " names polygon " + std::to_string(indices[i]) +
+      throw Error("backface list: index " + std::to_string(i) + " names polygon " + std::to_string(indices[i]) +
                        " of " + std::to_string(input.polygons.size()));
     }
     const Polygon& p = input.polygons[indices[i]];
     if (!std::isfinite(p.plane.n.x) || !std::isfinite(p.plane.n.y) || !std::isfinite(p.plane.n.z) ||
         !std::isfinite(p.plane.d)) {
-      throw SceneError("backface list: polygon " + std::to_string(indices[i]) + " has a non-finite plane");
+      throw Error("backface list: polygon " + std::to_string(indices[i]) + " has a non-finite plane");
     }
     if (static_cast<size_t>(p.first_vertex) + p.vertex_count > input.vertices.size() || p.vertex_count < 3) {
-      throw SceneError("backface list: polygon " + std::to_string(indices[i]) + " has vertices outside the vertex array");
+      throw Error("backface list: polygon " + std::to_string(indices[i]) + " has vertices outside the vertex array");
     }
   }
   for (size_t r = 0; r < ranges.size(); ++r) {
     if (static_cast<uint64_t>(ranges[r].first) + ranges[r].count > indices.size()) {
-      throw SceneError("backface list: range " + std::to_string(r) + " [" + std::to_string(ranges[r].first) + ", +" +
+      throw Error("backface list: range " + std::to_string(r) + " [" + std::to_string(ranges[r].first) + ", +" +
                        std::to_string(ranges[r].count) + ") lies outside the " + std::to_string(indices.size()) +
                        " indices");
     }
@@ -741,7 +741,7 @@ uint32_t ListCuller::cullRanges(std::span<const uint32_t> range_ids, const Backf
   uint64_t total = 0;
   for (uint32_t r : range_ids) {
     if (r >= range_count) {
-      throw SceneError("backface list: range " + std::to_string(r) + " of " + std::to_string(range_count));
+      throw Error("backface list: range " + std::to_string(r) + " of " + std::to_string(range_count));
     }
     total += m.spans[r].count;
   }

@@ -24,7 +24,7 @@ namespace walkvis {
 
 enum class ListCullMethod : uint8_t { kNone, kPolygon, kMask, kCluster, kHierarchy, kRegion };
 std::string_view listCullMethodName(ListCullMethod method);
-ListCullMethod parseListCullMethod(std::string_view name);  // SceneError naming the choices otherwise
+ListCullMethod parseListCullMethod(std::string_view name);  // Error naming the choices otherwise
 
 // Spare entries cullRange / cullRanges may write past the survivors (vector stores) before
 // shrinking `out`: reserve them to keep the per-frame call free of allocation.
@@ -38,7 +38,7 @@ struct IndexRange {
 class ListCuller {
  public:
   // One culling structure per range of `indices` (polygon indices into input.polygons). Ranges may
-  // overlap or repeat; empty ranges are allowed. Throws SceneError for a bad option or index.
+  // overlap or repeat; empty ranges are allowed. Throws Error for a bad option or index.
   // mask (options.mask_cone kAuto or kView): Zhang & Hoff's mask from the view cone, one per call,
   // over the normal clusters of all positions (one byte per position where they use at most 256
   // clusters). mask with kGroups: each range is cut into chunks of options.mask_group_size
@@ -62,7 +62,7 @@ class ListCuller {
   // kListCullOutSlack). Not thread-safe for kCluster and kHierarchy (a scratch buffer of unit
   // flags; tracking state): one ListCuller per thread there. kRegion runs the plane test of
   // kPolygon (a caller that knows its lists hold only front faces, drop_back_faces, need not call
-  // cullRange at all). Throws SceneError for a range index out of range (out unchanged then).
+  // cullRange at all). Throws Error for a range index out of range (out unchanged then).
   // Same as cullRanges of the one range.
   uint32_t cullRange(uint32_t range, const BackfaceView& view, std::vector<uint32_t>& out) const;
 
@@ -73,7 +73,7 @@ class ListCuller {
   // ranges: each distinct plane tested once per call, AVX-512 or AVX2 where the CPU has it, the same double
   // operations as isFrontFacing(), so the same result bit for bit). No allocation once `out` has
   // capacity for out.size() + the ranges' counts + kListCullOutSlack (`out` is resized once to
-  // that size and shrunk to what survives). Throws SceneError, with `out` unchanged, if an id is
+  // that size and shrunk to what survives). Throws Error, with `out` unchanged, if an id is
   // out of range.
   uint32_t cullRanges(std::span<const uint32_t> ranges, const BackfaceView& view, std::vector<uint32_t>& out) const;
 

@@ -31,6 +31,8 @@
 #include <unordered_map>
 
 #include "backface/backface.h"
+#include "core/check.h"
+#include "core/hash.h"
 
 namespace walkvis {
 namespace {
@@ -45,13 +47,7 @@ static_assert(sizeof(ConeBounds) == 32);
 
 struct Vec3Hash {
   size_t operator()(const glm::dvec3& v) const {
-    uint64_t h = 1469598103934665603ull;
-    for (int k = 0; k < 3; ++k) {
-      uint64_t bits;
-      std::memcpy(&bits, &v[k], sizeof bits);
-      h = (h ^ bits) * 1099511628211ull;
-    }
-    return static_cast<size_t>(h);
+    return static_cast<size_t>(fnv1aDoubles({v.x, v.y, v.z}));
   }
 };
 
@@ -109,7 +105,7 @@ class ConeCuller final : public BackfaceCuller {
   ConeCuller(const BackfaceInput& input, const BackfaceOptions& options) {
     if (options.cone_max_vertices < 3 || options.cone_max_vertices > 255 || options.cone_max_triangles < 1 ||
         options.cone_max_triangles > 512 || options.cone_max_triangles % 4 != 0) {
-      throw SceneError("backface cone: meshlet limits must be 3..255 vertices and 4..512 triangles (a multiple of 4)");
+      throw Error("backface cone: meshlet limits must be 3..255 vertices and 4..512 triangles (a multiple of 4)");
     }
     polygon_count_ = input.polygons.size();
     MeshInput mesh = meshInput(input);
@@ -158,7 +154,7 @@ class ConeCuller final : public BackfaceCuller {
         std::sort(key.begin(), key.end());
         auto it = by_key.find(key);
         if (it == by_key.end() || it->second.empty()) {
-          throw SceneError("backface cone: meshoptimizer returned a triangle that is not in the input");
+          throw Error("backface cone: meshoptimizer returned a triangle that is not in the input");
         }
         unit.push_back(it->second.back());
         it->second.pop_back();
@@ -174,6 +170,7 @@ class ConeCuller final : public BackfaceCuller {
   size_t stateBytes() const override { return bounds_.size() * sizeof(ConeBounds); }
 
   void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
+    WALKVIS_DCHECK(unit_culled.size() == unitCount());
     const double ex = view.eye.x - origin_.x, ey = view.eye.y - origin_.y, ez = view.eye.z - origin_.z;
     const size_t n = bounds_.size();
     for (size_t m = 0; m < n; ++m) {
@@ -193,7 +190,7 @@ class ConeCuller final : public BackfaceCuller {
 
 void coneInvisiblePolygons(const BackfaceInput& input, std::span<uint8_t> polygon_invisible) {
   if (polygon_invisible.size() != input.polygons.size()) {
-    throw SceneError("backface cone: coneInvisiblePolygons needs one flag per polygon");
+    throw Error("backface cone: coneInvisiblePolygons needs one flag per polygon");
   }
   const MeshInput mesh = meshInput(input);
   const size_t vertex_count = mesh.positions.size() / 3;

@@ -39,6 +39,7 @@
 
 #include "backface/backface.h"
 #include "backface/spread_bits.h"
+#include "core/check.h"
 
 namespace walkvis {
 
@@ -51,7 +52,7 @@ int maskResolutionFor(size_t polygons, int requested) {
 
 NormalMaskGrid::NormalMaskGrid(int n) : n_(n) {
   if (n_ < 1 || n_ > kMaxResolution) {
-    throw SceneError("backface mask: mask_resolution must be in [1, 18], got " + std::to_string(n_));
+    throw Error("backface mask: mask_resolution must be in [1, 18], got " + std::to_string(n_));
   }
   const size_t m = static_cast<size_t>(n_) + 1;
   stride_ = (m + 3) / 4 * 4;
@@ -337,6 +338,7 @@ class NormalMaskCuller final : public BackfaceCuller {
   }
 
   void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
+    WALKVIS_DCHECK(unit_culled.size() == unitCount());
     NormalMaskGrid::Table table;
     if (use_view_cone_) {
       const double len = glm::length(view.view_dir);

@@ -37,7 +37,7 @@ class NormalMaskGrid {
   static constexpr size_t kTablePadding = 16;
   using Table = std::array<uint8_t, 2048 + kTablePadding>;
 
-  // Throws SceneError unless 1 <= n <= kMaxResolution.
+  // Throws Error unless 1 <= n <= kMaxResolution.
   explicit NormalMaskGrid(int n);
 
   int resolution() const { return n_; }

@@ -7,6 +7,8 @@
 
 #include "backface/backface.h"
 
+#include "core/check.h"
+
 namespace walkvis {
 namespace {
 
@@ -36,6 +38,7 @@ class PolygonCuller final : public BackfaceCuller {
   size_t stateBytes() const override { return polygon_count_ * 4 * sizeof(double); }
 
   void cull(const BackfaceView& view, std::span<uint8_t> unit_culled) const override {
+    WALKVIS_DCHECK(unit_culled.size() == unitCount());
     const double ex = view.eye.x, ey = view.eye.y, ez = view.eye.z;
     const size_t n = polygon_count_;
     const double* nx = nx_.data();

@@ -35,7 +35,7 @@ struct ControlMesh {
 // (a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca).
 class LoopTopology {
  public:
-  // Throws SceneError when `triangles` is not a closed oriented manifold over vertex_count
+  // Throws Error when `triangles` is not a closed oriented manifold over vertex_count
   // vertices, or max_levels is outside [0, 6].
   LoopTopology(std::span<const std::array<uint32_t, 3>> triangles, size_t vertex_count, int max_levels);
 
@@ -79,7 +79,7 @@ struct SubdivisionResult {
 // compute every vertex they compute with the same arithmetic, so they agree bit for bit.
 SubdivisionResult subdivide(const LoopTopology& topology, std::span<const glm::dvec3> control_positions, int levels,
                             const glm::dvec3& eye, bool culling);
-// The same, building the topology on the way (throws SceneError as LoopTopology does, and for a
+// The same, building the topology on the way (throws Error as LoopTopology does, and for a
 // non-finite position).
 SubdivisionResult subdivide(const ControlMesh& mesh, int levels, const glm::dvec3& eye, bool culling);
 

@@ -76,9 +76,9 @@ bool frontFacing(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, 
 
 LoopTopology::LoopTopology(std::span<const std::array<uint32_t, 3>> triangles, size_t vertex_count, int max_levels) {
   if (max_levels < 0 || max_levels > kMaxLevels) {
-    throw SceneError("subdivision: levels must be in [0, " + std::to_string(kMaxLevels) + "]");
+    throw Error("subdivision: levels must be in [0, " + std::to_string(kMaxLevels) + "]");
   }
-  if (triangles.empty()) throw SceneError("subdivision: control mesh has no triangles");
+  if (triangles.empty()) throw Error("subdivision: control mesh has no triangles");
   // Closed oriented manifold: every directed edge once, and its reverse once.
   std::map<std::pair<uint32_t, uint32_t>, int> directed;
   for (size_t t = 0; t < triangles.size(); ++t) {
@@ -86,19 +86,19 @@ LoopTopology::LoopTopology(std::span<const std::array<uint32_t, 3>> triangles, s
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
       if (a >= vertex_count) {
-        throw SceneError("subdivision: triangle " + std::to_string(t) + " uses vertex " + std::to_string(a) +
+        throw Error("subdivision: triangle " + std::to_string(t) + " uses vertex " + std::to_string(a) +
                          " of " + std::to_string(vertex_count));
       }
-      if (a == b) throw SceneError("subdivision: triangle " + std::to_string(t) + " repeats a vertex");
+      if (a == b) throw Error("subdivision: triangle " + std::to_string(t) + " repeats a vertex");
       if (++directed[{a, b}] > 1) {
-        throw SceneError("subdivision: edge " + std::to_string(a) + "-" + std::to_string(b) +
+        throw Error("subdivision: edge " + std::to_string(a) + "-" + std::to_string(b) +
                          " is used twice in one direction (not an oriented manifold)");
       }
     }
   }
   for (const auto& [edge, n] : directed) {
     if (!directed.count({edge.second, edge.first})) {
-      throw SceneError("subdivision: edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) +
+      throw Error("subdivision: edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) +
                        " has no opposite triangle (the control mesh is not closed)");
     }
   }
@@ -122,9 +122,9 @@ LoopTopology::LoopTopology(std::span<const std::array<uint32_t, 3>> triangles, s
 
 SubdivisionResult subdivide(const LoopTopology& topology, std::span<const glm::dvec3> control_positions, int levels,
                             const glm::dvec3& eye, bool culling) {
-  if (levels < 0 || levels > topology.maxLevels()) throw SceneError("subdivision: levels beyond the topology's");
+  if (levels < 0 || levels > topology.maxLevels()) throw Error("subdivision: levels beyond the topology's");
   if (control_positions.size() != topology.level(0).vertex_count) {
-    throw SceneError("subdivision: " + std::to_string(control_positions.size()) + " positions for " +
+    throw Error("subdivision: " + std::to_string(control_positions.size()) + " positions for " +
                      std::to_string(topology.level(0).vertex_count) + " control vertices");
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -263,7 +263,7 @@ SubdivisionResult subdivide(const LoopTopology& topology, std::span<const glm::d
 SubdivisionResult subdivide(const ControlMesh& mesh, int levels, const glm::dvec3& eye, bool culling) {
   for (const glm::dvec3& p : mesh.positions) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      throw SceneError("subdivision: control mesh has a non-finite vertex");
+      throw Error("subdivision: control mesh has a non-finite vertex");
     }
   }
   const LoopTopology topology(mesh.triangles, mesh.positions.size(), levels);
@@ -271,7 +271,7 @@ SubdivisionResult subdivide(const ControlMesh& mesh, int levels, const glm::dvec
 }
 
 ControlMesh animatedBlob(double t, int refine) {
-  if (refine < 0 || refine > 5) throw SceneError("animatedBlob: refine must be in [0, 5]");
+  if (refine < 0 || refine > 5) throw Error("animatedBlob: refine must be in [0, 5]");
   const double g = (1.0 + std::sqrt(5.0)) / 2.0;
   std::vector<glm::dvec3> v = {{-1, g, 0}, {1, g, 0},  {-1, -g, 0}, {1, -g, 0}, {0, -1, g},  {0, 1, g},
                                {0, -1, -g}, {0, 1, -g}, {g, 0, -1},  {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};

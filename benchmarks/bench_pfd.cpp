@@ -53,14 +53,14 @@ std::shared_ptr<BenchLevel> prepare(const std::string& spec, const std::string& 
                                     uint32_t share_min) {
   auto b = std::make_shared<BenchLevel>();
   const Scene scene = loadScene(spec);
-  if (scene.levels.empty()) throw SceneError(spec + ": no walkable level");
+  if (scene.levels.empty()) throw Error(spec + ": no walkable level");
   size_t li = 0;
   if (level_choice == "largest") {
     for (size_t l = 1; l < scene.levels.size(); ++l)
       if (scene.levels[l].walkable_area > scene.levels[li].walkable_area) li = l;
   } else {
     li = std::stoul(level_choice);
-    if (li >= scene.levels.size()) throw SceneError(spec + ": no level " + level_choice);
+    if (li >= scene.levels.size()) throw Error(spec + ": no level " + level_choice);
   }
   b->bsp = buildBsp(scene);
   b->floor = scene.levels[li];
@@ -267,7 +267,7 @@ int main(int argc, char** argv) {
             ->Unit(benchmark::kMillisecond);
       }
     }
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     std::fprintf(stderr, "bench_pfd: %s\n", e.what());
     return 2;
   }

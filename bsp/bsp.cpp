@@ -15,6 +15,7 @@
 
 #include "bsp/bsp_internal.h"
 #include "bsp/exact_sign.h"
+#include "core/hash.h"
 
 namespace walkvis {
 
@@ -22,20 +23,20 @@ namespace {
 
 void validate(const Scene& scene) {
   if (scene.polygons.size() >= UINT32_MAX / 2)
-    throw SceneError("bsp: " + scene.name + ": too many polygons (" + std::to_string(scene.polygons.size()) + ")");
+    throw Error("bsp: " + scene.name + ": too many polygons (" + std::to_string(scene.polygons.size()) + ")");
   for (size_t i = 0; i < scene.polygons.size(); ++i) {
     const Polygon& p = scene.polygons[i];
     const std::string where = "bsp: " + scene.name + ": polygon " + std::to_string(i);
-    if (p.vertex_count < 3) throw SceneError(where + " has fewer than 3 vertices");
+    if (p.vertex_count < 3) throw Error(where + " has fewer than 3 vertices");
     if (static_cast<uint64_t>(p.first_vertex) + p.vertex_count > scene.vertices.size())
-      throw SceneError(where + " has vertices out of range");
+      throw Error(where + " has vertices out of range");
     const Plane& pl = p.plane;
     if (!(std::isfinite(pl.n.x) && std::isfinite(pl.n.y) && std::isfinite(pl.n.z) && std::isfinite(pl.d)))
-      throw SceneError(where + " has a non-finite plane");
-    if (pl.n.x == 0.0 && pl.n.y == 0.0 && pl.n.z == 0.0) throw SceneError(where + " has a zero normal");
+      throw Error(where + " has a non-finite plane");
+    if (pl.n.x == 0.0 && pl.n.y == 0.0 && pl.n.z == 0.0) throw Error(where + " has a zero normal");
     for (const glm::dvec3& v : scene.polygonVertices(p))
       if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)))
-        throw SceneError(where + " has a non-finite vertex");
+        throw Error(where + " has a non-finite vertex");
   }
 }
 
@@ -216,14 +217,8 @@ void frontToBack(const BspTree& tree, const glm::dvec3& eye, std::vector<uint32_
 
 uint64_t sceneHash(const Scene& scene) {
   // FNV-1a over the bytes of every polygon's vertices, plane and face id.
-  uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](const void* data, size_t size) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < size; ++i) {
-      h ^= b[i];
-      h *= 1099511628211ull;
-    }
-  };
+  uint64_t h = kFnvOffset;
+  auto mix = [&h](const void* data, size_t size) { h = fnv1a(data, size, h); };
   auto mixDouble = [&mix](double v) { mix(&v, sizeof v); };
   const uint64_t count = scene.polygons.size();
   mix(&count, sizeof count);
@@ -245,9 +240,9 @@ uint64_t sceneHash(const Scene& scene) {
 
 void checkBspMatchesScene(const BspTree& tree, const Scene& scene, const std::string& context) {
   if (tree.scene_hash != sceneHash(scene))
-    throw SceneError(context + ": BSP tree was built from another scene than " + scene.name);
+    throw Error(context + ": BSP tree was built from another scene than " + scene.name);
   if (tree.stats.input_polygons != scene.polygons.size())
-    throw SceneError(context + ": BSP tree was built from " + std::to_string(tree.stats.input_polygons) +
+    throw Error(context + ": BSP tree was built from " + std::to_string(tree.stats.input_polygons) +
                      " polygons, " + scene.name + " has " + std::to_string(scene.polygons.size()));
 }
 

@@ -184,7 +184,7 @@ struct DetailGroups {
 };
 DetailGroups detailGroups(const Scene& scene, double detail_extent);
 
-// Builds the tree over all polygons of the scene. Throws SceneError for a polygon whose plane is
+// Builds the tree over all polygons of the scene. Throws Error for a polygon whose plane is
 // not finite or has a zero normal (Scene's loaders never make one). Deterministic for given options.
 BspTree buildBsp(const Scene& scene, const BspOptions& options = {});
 
@@ -206,14 +206,17 @@ int sideOfPlane(const BspTree& tree, uint32_t fragment, const glm::dvec3& point)
 // A fingerprint of the scene's polygons (vertices, planes, face ids), so that a loaded tree can
 // be checked against the scene it is used with.
 uint64_t sceneHash(const Scene& scene);
-// Throws SceneError("<context>: ...") when the tree was not built from this scene (its
+// Throws Error("<context>: ...") when the tree was not built from this scene (its
 // scene_hash differs), e.g. a saved tree loaded for another model or version of it.
 void checkBspMatchesScene(const BspTree& tree, const Scene& scene, const std::string& context);
 
-// Writes the tree atomically (a temporary file next to `path`, then rename). SceneError naming
+// Writes the tree atomically (a temporary file next to `path`, then rename). Error naming
 // the path when it cannot be written.
 void saveBsp(const BspTree& tree, const std::string& path);
-// Reads a tree written by saveBsp. SceneError naming the path for a missing file, a wrong magic
+// The bytes saveBsp writes (header and payload), for files that embed a BSP (pfd.h's tree files).
+// Error naming `context` when the tree's fragment arrays disagree in length.
+std::vector<uint8_t> bspFileBytes(const BspTree& tree, const std::string& context);
+// Reads a tree written by saveBsp. Error naming the path for a missing file, a wrong magic
 // or version, a checksum mismatch, a truncated file or any index out of range; never crashes
 // or allocates more than the file's size implies.
 BspTree loadBsp(const std::string& path);

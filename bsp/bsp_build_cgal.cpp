@@ -68,6 +68,7 @@
 
 #include "bsp/bsp_internal.h"
 #include "bsp/exact_sign.h"
+#include "core/hash.h"
 
 namespace walkvis {
 
@@ -576,12 +577,8 @@ bool Builder::chooseByFullCount(const std::vector<uint32_t>& frags, size_t top_k
   };
   struct KeyHash {
     size_t operator()(const Key& k) const {
-      uint64_t h = 1469598103934665603ull;
-      for (double v : {k.a, k.b, k.c, k.d}) {
-        h ^= std::bit_cast<uint64_t>(v + 0.0);  // + 0.0: -0.0 and 0.0 hash alike
-        h *= 1099511628211ull;
-      }
-      return static_cast<size_t>(h);
+      // + 0.0: -0.0 and 0.0 hash alike
+      return static_cast<size_t>(fnv1aDoubles({k.a + 0.0, k.b + 0.0, k.c + 0.0, k.d + 0.0}));
     }
   };
   std::unordered_map<Key, uint32_t, KeyHash> seen;

@@ -18,8 +18,8 @@
 #include <string>
 
 #include "bsp/bsp.h"
-#include "scenes/byte_io.h"
-#include "scenes/loaders.h"
+#include "core/byte_io.h"
+#include "core/hash.h"
 
 namespace walkvis {
 
@@ -33,34 +33,6 @@ constexpr size_t kFragmentBytes = 4 * 4 + 4 * 8 + 1;
 constexpr size_t kNodeBytes = 4 * 8 + 7 * 4;
 
 using Writer = ByteWriter;
-
-class Reader {
- public:
-  Reader(std::span<const uint8_t> bytes, const std::string& context) : bytes_(bytes), context_(context) {}
-  template <typename T>
-  T get() {
-    if (bytes_.size() - at_ < sizeof(T)) fail("truncated");
-    T value;
-    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return value;
-  }
-  Plane getPlane() {
-    Plane p;
-    p.n.x = get<double>();
-    p.n.y = get<double>();
-    p.n.z = get<double>();
-    p.d = get<double>();
-    return p;
-  }
-  size_t remaining() const { return bytes_.size() - at_; }
-  [[noreturn]] void fail(const std::string& what) const { throw SceneError(context_ + ": BSP file: " + what); }
-
- private:
-  std::span<const uint8_t> bytes_;
-  size_t at_ = 0;
-  const std::string& context_;
-};
 
 std::vector<uint8_t> serialize(const BspTree& tree) {
   Writer w;
@@ -108,38 +80,23 @@ std::vector<uint8_t> serialize(const BspTree& tree) {
 
 }  // namespace
 
-void saveBsp(const BspTree& tree, const std::string& path) {
+std::vector<uint8_t> bspFileBytes(const BspTree& tree, const std::string& context) {
   if (tree.fragment_polygon.size() != tree.fragments.size() ||
       tree.fragment_orientation.size() != tree.fragments.size())
-    throw SceneError(path + ": BSP tree to save has inconsistent fragment arrays");
+    throw Error(context + ": BSP tree to save has inconsistent fragment arrays");
   const std::vector<uint8_t> payload = serialize(tree);
-  Writer header;
-  for (char c : kMagic) header.put<char>(c);
-  header.put<uint32_t>(kVersion);
-  header.put<uint32_t>(0);
-  header.put<uint64_t>(payload.size());
-  header.put<uint64_t>(fnv1a(payload.data(), payload.size()));
+  Writer file;
+  for (char c : kMagic) file.put<char>(c);
+  file.put<uint32_t>(kVersion);
+  file.put<uint32_t>(0);
+  file.put<uint64_t>(payload.size());
+  file.put<uint64_t>(fnv1a(payload.data(), payload.size()));
+  file.bytes.insert(file.bytes.end(), payload.begin(), payload.end());
+  return std::move(file.bytes);
+}
 
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw SceneError(path + ": cannot write BSP file (cannot create " + tmp + ")");
-    out.write(reinterpret_cast<const char*>(header.bytes.data()), static_cast<std::streamsize>(header.bytes.size()));
-    out.write(reinterpret_cast<const char*>(payload.data()), static_cast<std::streamsize>(payload.size()));
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      throw SceneError(path + ": cannot write BSP file (write failed)");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw SceneError(path + ": cannot write BSP file (" + ec.message() + ")");
-  }
+void saveBsp(const BspTree& tree, const std::string& path) {
+  writeFileAtomically(path, bspFileBytes(tree, path), "BSP file");
 }
 
 BspTree loadBsp(const std::string& path) {
@@ -148,7 +105,7 @@ BspTree loadBsp(const std::string& path) {
 }
 
 BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& context) {
-  Reader head(bytes, context);
+  ByteReader head(bytes, context + ": BSP file: ");
   if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
     head.fail("not a walkvis BSP file (bad magic)");
   for (size_t i = 0; i < sizeof kMagic; ++i) head.get<char>();
@@ -164,7 +121,7 @@ BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& con
   const std::span<const uint8_t> payload = bytes.subspan(kHeaderBytes);
   if (fnv1a(payload.data(), payload.size()) != checksum) head.fail("checksum mismatch (corrupt file)");
 
-  Reader r(payload, context);
+  ByteReader r(payload, context + ": BSP file: ");
   BspTree tree;
   tree.scene_hash = r.get<uint64_t>();
   tree.root = r.get<int32_t>();

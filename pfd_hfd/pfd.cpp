@@ -8,6 +8,7 @@
 
 #include <glm/common.hpp>
 
+#include "core/rng.h"
 #include "pfd_hfd/pfd.h"
 
 namespace walkvis {
@@ -94,15 +95,6 @@ inline uint32_t appendList(const PfdTree& tree, const PfdNode& node, const glm::
   }
   return object_tests;
 }
-
-uint64_t splitmix(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-
-double uniform(uint64_t& state) { return static_cast<double>(splitmix(state) >> 11) * 0x1p-53; }
 
 double triangleArea(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
   return 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
@@ -294,12 +286,12 @@ glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state) {
   for (const auto& ring : tree.region)
     for (size_t i = 1; i + 1 < ring.size(); ++i) total += triangleArea(ring[0], ring[i], ring[i + 1]);
   if (!(total > 0.0)) return {0.0, 0.0};
-  double pick = uniform(rng_state) * total;
+  double pick = uniform01(rng_state) * total;
   for (const auto& ring : tree.region) {
     for (size_t i = 1; i + 1 < ring.size(); ++i) {
       const double a = triangleArea(ring[0], ring[i], ring[i + 1]);
       if (pick <= a || (&ring == &tree.region.back() && i + 2 == ring.size())) {
-        double u = uniform(rng_state), v = uniform(rng_state);
+        double u = uniform01(rng_state), v = uniform01(rng_state);
         if (u + v > 1.0) {
           u = 1.0 - u;
           v = 1.0 - v;
@@ -382,7 +374,7 @@ std::optional<glm::dvec3> samplePfdLevel(const PfdLevel& level, uint64_t& rng_st
   double total = 0.0;
   for (const PfdTree& t : level.cells) total += std::max(t.stats.region_area, 0.0);
   if (!(total > 0.0)) return std::nullopt;
-  double pick = uniform(rng_state) * total;
+  double pick = uniform01(rng_state) * total;
   size_t c = 0, last = 0;
   for (; c < level.cells.size(); ++c) {
     const double a = level.cells[c].stats.region_area;

@@ -140,8 +140,8 @@ enum class TreeKind : uint8_t { kPfd = 0, kHfd = 1 };
 const char* treeKindName(TreeKind kind);  // "pfd", "hfd"
 
 // Thrown when a build would exceed its memory budget.
-struct PfdBudgetError : SceneError {
-  using SceneError::SceneError;
+struct PfdBudgetError : Error {
+  using Error::Error;
 };
 
 struct PfdStats {
@@ -282,7 +282,7 @@ struct PfdTree {
 
 // Builds the PFD tree of `bsp` over the convex pieces `walkable` ((x, z), any orientation; empty
 // or zero-area pieces are ignored) clipped to `cell` if given, on the height plane y = height.
-// Throws PfdBudgetError when options.max_memory is exceeded, SceneError for non-finite input.
+// Throws PfdBudgetError when options.max_memory is exceeded, Error for non-finite input.
 PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
                  const std::optional<PfdBox>& cell, const PfdOptions& options = {});
 
@@ -419,9 +419,9 @@ struct TreeFile {
 };
 
 // One file with the BSP and every tree: magic, version, FNV-1a 64 checksum over the payload;
-// written to a temporary file next to `path` and renamed. SceneError naming the path on failure.
+// written to a temporary file next to `path` and renamed. Error naming the path on failure.
 void saveTreeFile(const TreeFile& file, const std::string& path);
-// SceneError naming the path for a missing file, wrong magic or version, checksum mismatch,
+// Error naming the path for a missing file, wrong magic or version, checksum mismatch,
 // truncation or any index out of range; never allocates more than the file's size implies.
 TreeFile loadTreeFile(const std::string& path);
 // True when the file at `path` starts with the tree file's magic (false when it cannot be read):

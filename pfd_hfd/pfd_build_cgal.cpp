@@ -19,6 +19,7 @@
 #include <unordered_map>
 
 #include "bsp/exact_sign.h"
+#include "core/hash.h"
 #include "pfd_hfd/pfd.h"
 #include "pfd_hfd/pfd_internal.h"
 #include "pfd_hfd/pfd_search.h"
@@ -372,10 +373,9 @@ double positiveArea(const Region& r, const Line& l) {
 }
 
 uint64_t hashRun(const uint32_t* ids, size_t n) {
-  uint64_t h = 1469598103934665603ull ^ n;
+  uint64_t h = kFnvOffset ^ n;
   for (size_t i = 0; i < n; ++i) {
-    h ^= ids[i];
-    h *= 1099511628211ull;
+    h = fnv1aWord(h, ids[i]);
     h ^= h >> 29;
   }
   return h;
@@ -435,13 +435,7 @@ class Builder {
         q.n = -q.n;
         q.d = -q.d;
       }
-      const double key[4] = {q.n.x, q.n.y, q.n.z, q.d};
-      uint64_t hsh = 1469598103934665603ull;
-      for (double kv : key) {
-        uint64_t bits;
-        std::memcpy(&bits, &kv, sizeof bits);
-        hsh = (hsh ^ bits) * 1099511628211ull;
-      }
+      const uint64_t hsh = fnv1aDoubles({q.n.x, q.n.y, q.n.z, q.d});
       auto& bucket = by_hash[hsh];
       uint32_t canon = id;
       for (uint32_t other : bucket) {
@@ -663,9 +657,9 @@ class Builder {
       const uint64_t v = static_cast<uint64_t>(side_[vary_list_[k]] + 1) & 3;  // decided: -1, 0, +1
       key_[(k - b) / 32] |= v << (2 * ((k - b) % 32));
     }
-    uint64_t h = 1469598103934665603ull ^ static_cast<uint64_t>(id);
+    uint64_t h = kFnvOffset ^ static_cast<uint64_t>(id);
     for (uint64_t w : key_) {
-      h = (h ^ w) * 1099511628211ull;
+      h = fnv1aWord(h, w);
       h ^= h >> 31;
     }
     return h;
@@ -1667,12 +1661,12 @@ bool finite2(const glm::dvec2& p) { return std::isfinite(p.x) && std::isfinite(p
 Region makeRegion(std::span<const std::vector<glm::dvec2>> walkable, const std::optional<PfdBox>& cell,
                   Counters& counters) {
   if (cell && !(finite2(cell->lo) && finite2(cell->hi) && cell->lo.x < cell->hi.x && cell->lo.y < cell->hi.y))
-    throw SceneError("pfd: view cell is not a finite box with lo < hi");
+    throw Error("pfd: view cell is not a finite box with lo < hi");
   Region region;
   for (const auto& ring : walkable) {
     Piece p;
     for (const glm::dvec2& v : ring) {
-      if (!finite2(v)) throw SceneError("pfd: walkable region has a non-finite corner");
+      if (!finite2(v)) throw Error("pfd: walkable region has a non-finite corner");
       // Consecutive duplicates would make zero-length edges: skip them.
       if (!p.corners.empty() && p.corners.back().ax == v.x && p.corners.back().az == v.y) continue;
       p.corners.push_back(makeCorner(FT(v.x), FT(v.y)));
@@ -1754,14 +1748,14 @@ const char* treeKindName(TreeKind kind) {
 
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
                            const std::optional<PfdBox>& cell, std::span<const uint8_t> objects) {
-  if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
+  if (!std::isfinite(height)) throw Error("pfd: height plane is not finite");
   Counters counters;
   const Region region = makeRegion(walkable, cell, counters);
   PfdLineCount count;
   for (const Piece& p : region) count.area += pieceArea(p);
   if (region.empty()) return count;
   if (!objects.empty() && objects.size() != bsp.nodes.size())
-    throw SceneError("pfd: object node flags do not match the BSP");
+    throw Error("pfd: object node flags do not match the BSP");
   for (size_t i = 0; i < bsp.nodes.size(); ++i)
     if ((objects.empty() || objects[i] == 0) && classifyRegion(planeLine(bsp.nodes[i].plane, height), region, counters) == kCross)
       ++count.crossing;
@@ -1771,7 +1765,7 @@ PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::
 PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
                  const std::optional<PfdBox>& cell, const PfdOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  if (!std::isfinite(height)) throw SceneError("pfd: height plane is not finite");
+  if (!std::isfinite(height)) throw Error("pfd: height plane is not finite");
   PfdTree tree;
   tree.height = height;
   tree.cell = cell;

@@ -22,9 +22,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "core/byte_io.h"
+#include "core/hash.h"
 #include "pfd_hfd/pfd.h"
-#include "scenes/byte_io.h"
-#include "scenes/loaders.h"
 
 namespace walkvis {
 namespace {
@@ -37,33 +37,7 @@ constexpr uint32_t kVersion = 4;
 constexpr size_t kHeaderBytes = 32;
 
 using Writer = ByteWriter;
-
-
-struct Reader {
-  std::span<const uint8_t> bytes;
-  size_t pos = 0;
-  const std::string& context;
-  [[noreturn]] void fail(const std::string& what) const { throw SceneError(context + ": " + what); }
-  template <class T>
-  T get() {
-    if (bytes.size() - pos < sizeof(T)) fail("truncated tree file");
-    T v;
-    std::memcpy(&v, bytes.data() + pos, sizeof(T));
-    pos += sizeof(T);
-    return v;
-  }
-  double getFinite() {
-    const double v = get<double>();
-    if (!std::isfinite(v)) fail("non-finite number in tree file");
-    return v;
-  }
-  // A count of elements of `element_bytes` each that must fit in what is left.
-  uint32_t count(size_t element_bytes) {
-    const uint32_t n = get<uint32_t>();
-    if (static_cast<uint64_t>(n) * element_bytes > bytes.size() - pos) fail("truncated tree file (count too large)");
-    return n;
-  }
-};
+using Reader = ByteReader;
 
 void writeTree(Writer& w, const PfdTree& t) {
   w.put(t.height);
@@ -307,21 +281,7 @@ PfdTree readTree(Reader& r, size_t fragments) {
 }  // namespace
 
 void saveTreeFile(const TreeFile& file, const std::string& path) {
-  namespace fs = std::filesystem;
-  // The BSP part in saveBsp's own format, through a temporary file.
-  const std::string bsp_tmp = path + ".bsp.tmp";
-  saveBsp(file.bsp, bsp_tmp);
-  std::vector<uint8_t> bsp_bytes;
-  try {
-    bsp_bytes = readFileBytes(bsp_tmp);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(bsp_tmp, ec);
-    throw;
-  }
-  std::error_code ec;
-  fs::remove(bsp_tmp, ec);
-
+  const std::vector<uint8_t> bsp_bytes = bspFileBytes(file.bsp, path);
   Writer w;
   w.put(file.eye_height);
   w.put(static_cast<uint8_t>(file.kind));
@@ -345,43 +305,28 @@ void saveTreeFile(const TreeFile& file, const std::string& path) {
   h.put<uint32_t>(0);
   h.put(static_cast<uint64_t>(w.bytes.size()));
   h.put(fnv1a(w.bytes.data(), w.bytes.size()));
-
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(h.bytes.data()), static_cast<std::streamsize>(h.bytes.size()));
-    out.write(reinterpret_cast<const char*>(w.bytes.data()), static_cast<std::streamsize>(w.bytes.size()));
-    out.flush();
-    if (!out) {
-      fs::remove(tmp, ec);
-      throw SceneError(path + ": cannot write tree file");
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw SceneError(path + ": cannot write tree file (rename failed)");
-  }
+  const std::span<const uint8_t> parts[2] = {h.bytes, w.bytes};
+  writeFileAtomically(path, parts, "tree file");
 }
 
 TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::string& context) {
-  if (bytes.size() < kHeaderBytes) throw SceneError(context + ": truncated tree file (no header)");
-  if (std::memcmp(bytes.data(), kMagic, 8) != 0) throw SceneError(context + ": not a walkvis tree file (bad magic)");
-  Reader hr{bytes, 8, context};
+  if (bytes.size() < kHeaderBytes) throw Error(context + ": truncated tree file (no header)");
+  if (std::memcmp(bytes.data(), kMagic, 8) != 0) throw Error(context + ": not a walkvis tree file (bad magic)");
+  Reader hr(bytes.subspan(8), context + ": tree file: ");
   const uint32_t version = hr.get<uint32_t>();
   if (version != kVersion)
-    throw SceneError(context + ": tree file version " + std::to_string(version) + ", expected " +
+    throw Error(context + ": tree file version " + std::to_string(version) + ", expected " +
                      std::to_string(kVersion));
-  if (hr.get<uint32_t>() != 0) throw SceneError(context + ": bad tree file header");
+  if (hr.get<uint32_t>() != 0) throw Error(context + ": bad tree file header");
   const uint64_t size = hr.get<uint64_t>();
   const uint64_t checksum = hr.get<uint64_t>();
   if (size != bytes.size() - kHeaderBytes)
-    throw SceneError(context + ": truncated tree file (" + std::to_string(bytes.size() - kHeaderBytes) +
+    throw Error(context + ": truncated tree file (" + std::to_string(bytes.size() - kHeaderBytes) +
                      " payload bytes, header says " + std::to_string(size) + ")");
   const std::span<const uint8_t> payload = bytes.subspan(kHeaderBytes);
-  if (fnv1a(payload.data(), payload.size()) != checksum) throw SceneError(context + ": tree file checksum mismatch");
+  if (fnv1a(payload.data(), payload.size()) != checksum) throw Error(context + ": tree file checksum mismatch");
 
-  Reader r{payload, 0, context};
+  Reader r(payload, context + ": tree file: ");
   TreeFile file;
   file.eye_height = r.getFinite();
   const uint8_t kind = r.get<uint8_t>();
@@ -392,9 +337,8 @@ TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::strin
   file.visibility.refine_rays = r.get<uint32_t>();
   file.visibility.seed = r.get<uint64_t>();
   const uint64_t bsp_size = r.get<uint64_t>();
-  if (bsp_size > payload.size() - r.pos) r.fail("truncated tree file (BSP part)");
-  file.bsp = loadBspFromMemory(payload.subspan(r.pos, bsp_size), context + " (BSP part)");
-  r.pos += bsp_size;
+  if (bsp_size > r.remaining()) r.fail("truncated (BSP part)");
+  file.bsp = loadBspFromMemory(r.take(bsp_size), context + " (BSP part)");
   const uint32_t levels = r.count(24);
   file.levels.resize(levels);
   for (PfdLevel& l : file.levels) {
@@ -405,7 +349,7 @@ TreeFile loadTreeFileFromMemory(std::span<const uint8_t> bytes, const std::strin
     l.cells.reserve(cells);
     for (uint32_t c = 0; c < cells; ++c) l.cells.push_back(readTree(r, file.bsp.fragments.size()));
   }
-  if (r.pos != payload.size()) r.fail("trailing bytes in tree file");
+  if (r.remaining() != 0) r.fail("trailing bytes");
   return file;
 }
 

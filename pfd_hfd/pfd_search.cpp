@@ -16,6 +16,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/rng.h"
+
 namespace walkvis {
 
 namespace {
@@ -128,10 +130,8 @@ struct LineBitsHash {
 uint64_t hashSet(const uint64_t* set, size_t words) {
   uint64_t h = 0x9e3779b97f4a7c15ull;
   for (size_t w = 0; w < words; ++w) {
-    uint64_t z = set[w] + h + 0x9e3779b97f4a7c15ull * (w + 1);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    h ^= z ^ (z >> 31);
+    uint64_t s = set[w] + h + 0x9e3779b97f4a7c15ull * w;  // splitmix64 adds the constant once more
+    h ^= splitmix64(s);
   }
   return h;
 }

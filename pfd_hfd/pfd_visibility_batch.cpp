@@ -6,11 +6,15 @@
 
 #include "pfd_hfd/pfd_internal.h"
 
+#include "core/check.h"
+
 namespace walkvis {
 
 void visibleBatch(const VisibilityScene& vis, std::span<const uint32_t> fragments,
                   std::span<const std::vector<glm::dvec2>> region, double height, std::span<uint8_t> visible,
                   std::span<glm::dvec2> witnesses, VisibilityCounters& counters) {
+  WALKVIS_DCHECK(visible.size() == fragments.size());
+  WALKVIS_DCHECK(witnesses.empty() || witnesses.size() == fragments.size());
   const size_t n = fragments.size();
   if (n == 0) return;
   const auto witness = [&](size_t i) { return witnesses.empty() ? nullptr : &witnesses[i]; };

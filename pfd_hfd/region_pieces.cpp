@@ -5,6 +5,8 @@
 
 #include <glm/common.hpp>
 
+#include "core/check.h"
+
 namespace walkvis {
 namespace {
 
@@ -113,6 +115,7 @@ void PieceGrid::build(std::span<const Convex2> pieces) {
 std::optional<glm::dvec2> nearestInPieces(std::span<const Convex2> pieces, const glm::dvec2& want, double inset,
                                           const glm::dvec2* g, double c0, std::vector<glm::dvec2>& clip,
                                           PieceGrid& grid) {
+  WALKVIS_DCHECK(grid.nx == 0 || grid.seen.size() == pieces.size());  // built over these pieces
   double best = std::numeric_limits<double>::infinity();
   std::optional<glm::dvec2> out;
   auto consider = [&](const Convex2& piece) {

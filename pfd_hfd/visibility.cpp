@@ -21,6 +21,9 @@
 // Everything is deterministic in (options.seed, fragment, region, height).
 #include "pfd_hfd/visibility.h"
 
+#include "core/check.h"
+#include "core/embree_scene.h"
+#include "core/rng.h"
 #include "pfd_hfd/hull_distance.h"
 #include "pfd_hfd/region_pieces.h"
 
@@ -73,17 +76,6 @@ constexpr uint32_t kMaxProofDepth = 6;
 // (a corridor's walls, floor and ceiling are a few dozen; beyond that the proof gives up).
 constexpr uint32_t kMaxPatch = 48;
 
-uint64_t splitmix(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-double uniform01(uint64_t& state) { return static_cast<double>(splitmix(state) >> 11) * 0x1.0p-53; }
-uint64_t mixHash(uint64_t h, uint64_t v) {
-  uint64_t s = h ^ (v + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2));
-  return splitmix(s);
-}
 
 // The squared diameter of a point set (largest squared distance between two of its points).
 double diameter2(std::span<const glm::dvec2> v) {
@@ -332,8 +324,7 @@ Scratch& scratch() {
 }  // namespace
 
 struct VisibilityScene::Impl {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
+  EmbreeScene embree;
   VisibilityOptions options;
   glm::dvec3 origin{0.0};
   double extent = 1.0;
@@ -370,11 +361,6 @@ struct VisibilityScene::Impl {
   bool visibleTarget(const Target& shape, std::span<const std::vector<glm::dvec2>> region, double height,
                      VisibilityCounters& counters, glm::dvec2* witness) const;
 
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
-
   glm::vec3 rel(const glm::dvec3& p) const { return glm::vec3(p - origin); }
 
   // Occlusion of the segment eye + t (target - eye), t in [0, tfar]. With `hit`, the nearest
@@ -391,7 +377,7 @@ struct VisibilityScene::Impl {
       ray.tnear = 0.0f;
       ray.tfar = static_cast<float>(tfar);
       ray.mask = ~0u;
-      rtcOccluded1(scene, &context, &ray);
+      rtcOccluded1(embree.scene(), &context, &ray);
       return ray.tfar < 0.0f;  // Embree marks an occluded ray with tfar = -inf
     }
     RTCRayHit rh{};
@@ -404,7 +390,7 @@ struct VisibilityScene::Impl {
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene, &context, &rh);
+    rtcIntersect1(embree.scene(), &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit->fragment = triangle_fragment[rh.hit.primID];
     hit->t = rh.ray.tfar;
@@ -577,7 +563,7 @@ struct VisibilityScene::Impl {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    rtcOccluded16(valid, scene, &context, &ray);
+    rtcOccluded16(valid, embree.scene(), &context, &ray);
     for (int k = 0; k < n; ++k)
       if (!(ray.tfar[k] < 0.0f)) return k;
     return -1;
@@ -610,7 +596,7 @@ VisibilityScene::~VisibilityScene() = default;
 const VisibilityOptions& VisibilityScene::options() const { return impl_->options; }
 
 std::string VisibilityScene::deviceInfo() const {
-  auto prop = [&](RTCDeviceProperty p) { return rtcGetDeviceProperty(impl_->device, p); };
+  auto prop = [&](RTCDeviceProperty p) { return rtcGetDeviceProperty(impl_->embree.device(), p); };
   const ssize_t v = prop(RTC_DEVICE_PROPERTY_VERSION);
   return "Embree " + std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." + std::to_string(v % 100) +
          ": native packets 4 " + (prop(RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) ? "yes" : "no") + ", 8 " +
@@ -637,7 +623,7 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
     }
     s.origin = 0.5 * (lo + hi);
     s.extent = std::max(glm::length(hi - lo), 1e-300);
-    if (!std::isfinite(s.extent)) throw SceneError("visibility: scene bounds are not finite");
+    if (!std::isfinite(s.extent)) throw Error("visibility: scene bounds are not finite");
   }
 
   // Outlines: the convex hull of each input polygon's fragments, in that polygon's plane.
@@ -686,8 +672,6 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
   // Cells of 1/256 of the extent: a few per wall on a building, tens of edges per cell at most.
   s.edge_partners = collinearPartners(s.outline_first, exact, s.extent / 256.0, kMinGap * s.extent);
 
-  s.device = rtcNewDevice(nullptr);
-  if (!s.device) throw SceneError("visibility: Embree rtcNewDevice failed");
   std::vector<uint32_t> indices;
   for (uint32_t f = 0; f < nf; ++f) {
     const Polygon& p = s.fragments[f];
@@ -698,41 +682,21 @@ VisibilityScene VisibilityScene::build(const BspTree& bsp, const VisibilityOptio
       s.fragment_normal.push_back(glm::vec3(p.plane.n));
     }
   }
-  s.scene = rtcNewScene(s.device);
-  // Watertight triangle tests: a ray through an edge shared by two blockers is not let through.
-  rtcSetSceneFlags(s.scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_HIGH);
-  if (!s.triangle_fragment.empty()) {
-    RTCGeometry geom = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), s.vertices.size()));
-    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(uint32_t), s.triangle_fragment.size()));
-    if (!vb || !ib) {
-      rtcReleaseGeometry(geom);
-      throw SceneError("visibility: Embree buffer allocation failed (error " +
-                       std::to_string(rtcGetDeviceError(s.device)) + ")");
-    }
-    for (size_t k = 0; k < s.vertices.size(); ++k) {
-      const glm::vec3 p = s.rel(s.vertices[k]);
-      vb[3 * k] = p.x, vb[3 * k + 1] = p.y, vb[3 * k + 2] = p.z;
-    }
-    std::copy(indices.begin(), indices.end(), ib);
-    rtcSetGeometryUserData(geom, s.fragment_normal.data());
-    rtcSetGeometryIntersectFilterFunction(geom, filterFrontSide);
-    rtcSetGeometryOccludedFilterFunction(geom, filterFrontSide);
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(s.scene, geom);
-    rtcReleaseGeometry(geom);
-  }
-  rtcCommitScene(s.scene);
-  if (rtcGetDeviceError(s.device) != RTC_ERROR_NONE) throw SceneError("visibility: Embree scene build failed");
+  // The filter lets a ray pass the back of a fragment (front sides block, as a wall's front does).
+  s.embree = EmbreeScene({.vertices = s.vertices,
+                          .origin = s.origin,
+                          .indices = indices,
+                          .intersect_filter = filterFrontSide,
+                          .occluded_filter = filterFrontSide,
+                          .user_data = s.fragment_normal.data()},
+                         "visibility");
   return VisibilityScene(std::move(impl));
 }
 
 bool VisibilityScene::visibleFromRegion(uint32_t fragment, std::span<const std::vector<glm::dvec2>> region,
                                         double height, VisibilityCounters& counters, glm::dvec2* witness) const {
   const Impl& s = *impl_;
+  WALKVIS_DCHECK(!region.empty());
   if (fragment >= s.fragments.size()) {
     ++counters.tests;
     return false;

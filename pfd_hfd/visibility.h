@@ -83,7 +83,7 @@ struct VisibilityCounters {
 
 class VisibilityScene {
  public:
-  // All fragments of `bsp` as blockers (one Embree device and scene, committed). Throws SceneError
+  // All fragments of `bsp` as blockers (one Embree device and scene, committed). Throws Error
   // when Embree cannot be initialised.
   static VisibilityScene build(const BspTree& bsp, const VisibilityOptions& options = {});
   VisibilityScene(VisibilityScene&&) noexcept;

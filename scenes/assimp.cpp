@@ -62,6 +62,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "core/byte_io.h"
 #include "scenes/loaders.h"
 #include "scenes/mesh_merge.h"
 #include "scenes/scene.h"
@@ -261,7 +262,7 @@ void checkColladaNodes(std::string_view text, const std::string& context) {
       if (!open.empty()) edges[open.back()].push_back(n);
       if (tag.empty() || tag.back() != '/') open.push_back(n);
       if (open.size() > static_cast<size_t>(kMaxNodeDepth)) {
-        throw SceneError(context + ": Collada nodes nested deeper than " + std::to_string(kMaxNodeDepth) + " levels");
+        throw Error(context + ": Collada nodes nested deeper than " + std::to_string(kMaxNodeDepth) + " levels");
       }
     } else if (named("/node")) {
       if (!open.empty()) open.pop_back();
@@ -288,7 +289,7 @@ void checkColladaNodes(std::string_view text, const std::string& context) {
       auto& [n, next] = stack.back();
       if (next < edges[n].size()) {
         const uint32_t c = edges[n][next++];
-        if (state[c] == 1) throw SceneError(context + ": Collada node instances form a cycle");
+        if (state[c] == 1) throw Error(context + ": Collada node instances form a cycle");
         if (state[c] == 0) {
           state[c] = 1;
           stack.emplace_back(c, 0);
@@ -299,7 +300,7 @@ void checkColladaNodes(std::string_view text, const std::string& context) {
       for (uint32_t c : edges[n]) total = std::min(kMaxColladaNodes + 1, total + expanded[c]);
       expanded[n] = total;
       if (total > kMaxColladaNodes) {
-        throw SceneError(context + ": Collada node instances expand to more than " +
+        throw Error(context + ": Collada node instances expand to more than " +
                          std::to_string(kMaxColladaNodes) + " nodes");
       }
       state[n] = 2;
@@ -353,10 +354,10 @@ void checkStepReferences(std::string_view text, const std::string& context) {
     }
   }
   // A cut-off last record crashes the reader just the same.
-  if (!ended) throw SceneError(context + ": IFC DATA section does not end (no ENDSEC;): the file is truncated");
+  if (!ended) throw Error(context + ": IFC DATA section does not end (no ENDSEC;): the file is truncated");
   for (const auto& [from, to] : references) {
     if (!defined.count(to)) {
-      throw SceneError(context + ": IFC entity #" + std::to_string(from) + " refers to #" + std::to_string(to) +
+      throw Error(context + ": IFC entity #" + std::to_string(from) + " refers to #" + std::to_string(to) +
                        ", which the file does not define (truncated?)");
     }
   }
@@ -427,14 +428,14 @@ std::vector<Instance> collectInstances(const aiScene* scene, const std::string& 
     stack.pop_back();
     if (!item.node) continue;
     if (item.depth > kMaxNodeDepth) {
-      throw SceneError(context + ": assimp: node tree deeper than " + std::to_string(kMaxNodeDepth) + " levels");
+      throw Error(context + ": assimp: node tree deeper than " + std::to_string(kMaxNodeDepth) + " levels");
     }
-    if (!visited.insert(item.node).second) throw SceneError(context + ": assimp: node reached twice (a cycle)");
+    if (!visited.insert(item.node).second) throw Error(context + ": assimp: node reached twice (a cycle)");
     const glm::dmat4 world = item.parent * toDmat4(item.node->mTransformation);
     for (unsigned i = 0; i < item.node->mNumMeshes; ++i) {
       const unsigned m = item.node->mMeshes[i];
       if (m >= scene->mNumMeshes || !scene->mMeshes[m]) {
-        throw SceneError(context + ": assimp: node '" + oneLineMessage(item.node->mName.C_Str()) + "' names mesh " +
+        throw Error(context + ": assimp: node '" + oneLineMessage(item.node->mName.C_Str()) + "' names mesh " +
                          std::to_string(m) + " of " + std::to_string(scene->mNumMeshes));
       }
       out.push_back({scene->mMeshes[m], world});
@@ -645,22 +646,22 @@ void probeInChild(std::span<const uint8_t> bytes, const std::string& path, const
   }
   if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 3)) return;
   if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM) {
-    throw SceneError(context + ": assimp did not finish reading it in " + std::to_string(std::max(1u, options.import_seconds_max)) +
+    throw Error(context + ": assimp did not finish reading it in " + std::to_string(std::max(1u, options.import_seconds_max)) +
                      " s: the file is malformed or too large");
   }
   const std::string how = WIFSIGNALED(status) ? std::string("signal ") + std::to_string(WTERMSIG(status)) + " (" +
                                                     strsignal(WTERMSIG(status)) + ")"
                                               : "exit status " + std::to_string(WEXITSTATUS(status));
-  throw SceneError(context + ": assimp crashed reading it (" + how + "): the file is malformed");
+  throw Error(context + ": assimp crashed reading it (" + how + "): the file is malformed");
 }
 
 Scene loadBytes(std::span<const uint8_t> bytes, const std::string& path_or_empty, const std::string& ext_in,
                 const std::string& context, const LoadOptions& options) {
   if (bytes.size() > kMaxFileBytes) {
-    throw SceneError(context + ": file too large for the assimp loader (" + std::to_string(bytes.size() >> 20) +
+    throw Error(context + ": file too large for the assimp loader (" + std::to_string(bytes.size() >> 20) +
                      " MiB, at most " + std::to_string(kMaxFileBytes >> 20) + " MiB)");
   }
-  if (bytes.empty()) throw SceneError(context + ": empty file");
+  if (bytes.empty()) throw Error(context + ": empty file");
   std::string ext;
   for (char c : asciiLower(ext_in)) {
     if (std::isalnum(static_cast<unsigned char>(c)) && ext.size() < 16) ext += c;
@@ -681,17 +682,17 @@ Scene loadBytes(std::span<const uint8_t> bytes, const std::string& path_or_empty
   try {
     scene = importFile(importer, bytes, path_or_empty, ext, options);
   } catch (const std::exception& e) {
-    throw SceneError(context + ": assimp: " + oneLineMessage(e.what()));
+    throw Error(context + ": assimp: " + oneLineMessage(e.what()));
   }
   if (!scene) {
     const std::string error = oneLineMessage(importer.GetErrorString());
     // What assimp says when points and lines were all there was, or a mesh had no faces at all.
     if (error.find("No meshes remaining") != std::string::npos || error.find("contains no faces") != std::string::npos) {
-      throw SceneError(context + ": no triangles (assimp: " + error + ")");
+      throw Error(context + ": no triangles (assimp: " + error + ")");
     }
-    throw SceneError(context + ": assimp: " + error);
+    throw Error(context + ": assimp: " + error);
   }
-  if (!scene->mRootNode) throw SceneError(context + ": assimp: no node tree");
+  if (!scene->mRootNode) throw Error(context + ": assimp: no node tree");
 
   const std::vector<Instance> instances = collectInstances(scene, context);
   uint64_t triangles = 0;
@@ -699,11 +700,11 @@ Scene loadBytes(std::span<const uint8_t> bytes, const std::string& path_or_empty
     if (inst.mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) triangles += inst.mesh->mNumFaces;
   }
   if (triangles == 0) {
-    throw SceneError(context + ": no triangles (assimp read " + std::to_string(scene->mNumMeshes) + " meshes, " +
+    throw Error(context + ": no triangles (assimp read " + std::to_string(scene->mNumMeshes) + " meshes, " +
                      std::to_string(instances.size()) + " mesh instances, none with triangles)");
   }
   if (triangles > kMaxTriangles) {
-    throw SceneError(context + ": " + std::to_string(triangles) + " triangles over all mesh instances, more than " +
+    throw Error(context + ": " + std::to_string(triangles) + " triangles over all mesh instances, more than " +
                      std::to_string(kMaxTriangles));
   }
 
@@ -735,7 +736,7 @@ Scene loadBytes(std::span<const uint8_t> bytes, const std::string& path_or_empty
       if (face.mNumIndices != 3 || !face.mIndices) continue;  // points and lines left after sorting
       for (unsigned k = 0; k < 3; ++k) {
         if (face.mIndices[k] >= mesh->mNumVertices) {
-          throw SceneError(context + ": assimp: mesh '" + oneLineMessage(mesh->mName.C_Str()) + "' face " +
+          throw Error(context + ": assimp: mesh '" + oneLineMessage(mesh->mName.C_Str()) + "' face " +
                            std::to_string(fi) + ": index " + std::to_string(face.mIndices[k]) + " out of range (" +
                            std::to_string(mesh->mNumVertices) + " vertices)");
         }
@@ -776,7 +777,7 @@ Scene loadAssimp(const std::string& path, const LoadOptions& options) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (!ec && size > kMaxFileBytes) {
-    throw SceneError(path + ": file too large for the assimp loader (" + std::to_string(size >> 20) +
+    throw Error(path + ": file too large for the assimp loader (" + std::to_string(size >> 20) +
                      " MiB, at most " + std::to_string(kMaxFileBytes >> 20) + " MiB)");
   }
   // Read here too: a missing file gets our message, and the unit sniffing needs the bytes.

@@ -123,8 +123,8 @@ Scene generateHouse(GeneratorParams& params) {
   const std::string& g = params.generator();
   const double xs = 1.0;                                     // first riser
   const double xe = xs + static_cast<double>(steps - 1) * tread;  // last riser, top of the stair
-  if (xe > w - 1.0) throw SceneError(g + ": the stair (" + std::to_string(xe - xs) + " m) does not fit the width");
-  if (sw > d - 2.0) throw SceneError(g + ": the stair is too wide for the depth");
+  if (xe > w - 1.0) throw Error(g + ": the stair (" + std::to_string(xe - xs) + " m) does not fit the width");
+  if (sw > d - 2.0) throw Error(g + ": the stair is too wide for the depth");
   const double r = storey / static_cast<double>(steps);
   const double ceil0 = storey - slab, ceil1 = 2.0 * storey - slab;
   Scene scene;
@@ -167,8 +167,8 @@ Scene generateRamp(GeneratorParams& params) {
   const std::string& g = params.generator();
   // The walker takes faces steeper than acos(kWallMaxNormalY = 0.9) ≈ 25.8° for walls; 24° keeps
   // the ramp a floor with a margin.
-  if (std::atan2(rise, l2) > 24.0 * M_PI / 180.0) throw SceneError(g + ": the ramp is steeper than 24 degrees");
-  if (h - rise < 2.2) throw SceneError(g + ": the height leaves less than 2.2 m over the high floor");
+  if (std::atan2(rise, l2) > 24.0 * M_PI / 180.0) throw Error(g + ": the ramp is steeper than 24 degrees");
+  if (h - rise < 2.2) throw Error(g + ": the height leaves less than 2.2 m over the high floor");
   const double xa = l1, xb = l1 + l2, xc = l1 + l2 + l3;
   Scene scene;
   Out out(scene, g);

@@ -16,7 +16,7 @@ Scene generateScene(const std::string& name, GeneratorParams& params) {
   if (name.rfind("hard:", 0) == 0) return generateHardCase(name, params);
   std::string known = "office, ninefacet, sphere, dome, table_room, house, ramp";
   for (const auto& n : hardCaseNames()) known += ", " + n;
-  throw SceneError("gen:" + name + ": unknown generator (known: " + known + ")");
+  throw Error("gen:" + name + ": unknown generator (known: " + known + ")");
 }
 
 }  // namespace walkvis

@@ -3,7 +3,7 @@
 // around the hard feature, so BSP/PFD/HFD tests can validate orders on it. Each case's comment
 // says what it stresses. All are deterministic and take no parameters.
 //
-// Every case loads except hard:nan and hard:infinite, whose loading throws SceneError naming
+// Every case loads except hard:nan and hard:infinite, whose loading throws Error naming
 // the generator and the face ("gen:hard:nan: face N has a non-finite coordinate (...)").
 // hard:zero-area loads with its degenerate faces dropped and counted in scene.report.
 #include <algorithm>
@@ -348,7 +348,7 @@ void zeroArea(Hard& h) {
 }
 
 // Non-finite input: a valid room and one face with a NaN (or an infinite) coordinate. Loading
-// must throw SceneError that names the generator and the face, never crash or produce a scene.
+// must throw Error that names the generator and the face, never crash or produce a scene.
 void nonFinite(Hard& h, double bad) {
   h.room();
   h.raw({{0, 0, 0}, {1, 0, 0}, {1, bad, 0}});
@@ -402,7 +402,7 @@ Scene generateHardCase(const std::string& name, GeneratorParams& params) {
   } else {
     std::string known;
     for (const auto& n : hardCaseNames()) known += (known.empty() ? "" : ", ") + n;
-    throw SceneError(context + ": unknown hard case '" + base + "' (known: " + known + ")");
+    throw Error(context + ": unknown hard case '" + base + "' (known: " + known + ")");
   }
   return scene;
 }

@@ -31,9 +31,7 @@
 // (or about the same totals with floors=N and rooms divided by N: rooms=1050&floors=4 gives
 // 102,699). Generation is linear: ~0.1–0.2 s for 100k polygons in Release.
 //
-// Randomness: splitmix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators",
-// OOPSLA 2014 [SteeleLeaFlood2014]) with our own mapping to [0, 1), so a seed gives the same
-// building with every standard library (std::uniform_*_distribution differs between them).
+// Randomness: core/rng.h, so a seed gives the same building with every standard library.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -42,23 +40,11 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/rng.h"
 #include "scenes/generators.h"
 
 namespace walkvis {
 namespace {
-
-struct Rng {
-  uint64_t state;
-  uint64_t next() {
-    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-  bool chance(double p) { return uniform() < p; }
-};
 
 // Material colours (0xRRGGBB); faces get a small deterministic shade so that neighbouring
 // faces of one material stay distinguishable under flat shading.
@@ -424,7 +410,7 @@ Scene generateOffice(GeneratorParams& params) {
                           (14.0 + 5.0 * static_cast<double>(cfg.furniture));
   constexpr double kMaxPolygons = 4e6;
   if (estimate > kMaxPolygons) {
-    throw SceneError(params.generator() + ": rooms·floors·(14+5·furniture) = " +
+    throw Error(params.generator() + ": rooms·floors·(14+5·furniture) = " +
                      std::to_string(static_cast<int64_t>(estimate)) + " polygons, more than the limit of 4000000");
   }
   Scene scene;

@@ -11,7 +11,7 @@
 namespace walkvis {
 
 // Generator parameters from the query string. Every get* names the key it reads; a key given but
-// never read, an unparsable value or one outside [lo, hi] is a SceneError naming the generator.
+// never read, an unparsable value or one outside [lo, hi] is a Error naming the generator.
 class GeneratorParams {
  public:
   GeneratorParams(std::string generator, std::map<std::string, std::string> values);

@@ -3,7 +3,7 @@
 //
 // tinygltf parses the JSON and buffers; it does not check that accessors, buffer views and node
 // references stay inside what they point at, so every index and byte range used here is checked
-// first and anything malformed is a one-line SceneError naming the file. Each triangle of a
+// first and anything malformed is a one-line Error naming the file. Each triangle of a
 // TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive of the default scene's node trees becomes one
 // input face, in world coordinates (node matrices or TRS applied); each primitive of a node instance
 // is one object for face merging (mesh_merge.h). Images are never decoded.
@@ -33,6 +33,7 @@
 #define TINYGLTF_NO_FS
 #include <tiny_gltf.h>
 
+#include "core/byte_io.h"
 #include "scenes/loaders.h"
 #include "scenes/mesh_merge.h"
 #include "scenes/scene.h"
@@ -65,7 +66,7 @@ bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std:
   }
   try {
     *out = readFileBytes(path);
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     if (err) *err = e.what();
     return false;
   }
@@ -102,7 +103,7 @@ void checkJsonDepth(std::string_view json, const std::string& context) {
       in_string = true;
     } else if (c == '[' || c == '{') {
       if (++depth > kMaxJsonDepth) {
-        throw SceneError(context + ": malformed glTF: JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+        throw Error(context + ": malformed glTF: JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
                          " levels");
       }
     } else if (c == ']' || c == '}') {
@@ -120,7 +121,7 @@ class GltfBuilder {
   GltfBuilder(const tinygltf::Model& model, const std::string& context, bool merge)
       : model_(model), context_(context), merge_(merge) {}
 
-  [[noreturn]] void fail(const std::string& what) const { throw SceneError(context_ + ": " + what); }
+  [[noreturn]] void fail(const std::string& what) const { throw Error(context_ + ": " + what); }
 
   Scene build() {
     std::vector<int> roots;
@@ -425,22 +426,22 @@ class GltfBuilder {
 
 Scene loadGltfBytes(std::span<const uint8_t> bytes, const std::string& context, bool binary, bool files_allowed,
                     const std::string& base_dir, bool merge) {
-  if (bytes.size() >= kMaxFileBytes) throw SceneError(context + ": file too large for glTF (" +
+  if (bytes.size() >= kMaxFileBytes) throw Error(context + ": file too large for glTF (" +
                                                        std::to_string(bytes.size()) + " bytes)");
   if (binary) {
     // The 12-byte GLB header, checked here for clearer messages than tinygltf's.
     if (bytes.size() < 12) {
-      throw SceneError(context + ": truncated GLB header (" + std::to_string(bytes.size()) + " bytes, need 12)");
+      throw Error(context + ": truncated GLB header (" + std::to_string(bytes.size()) + " bytes, need 12)");
     }
-    if (std::memcmp(bytes.data(), "glTF", 4) != 0) throw SceneError(context + ": not a GLB file (bad magic)");
+    if (std::memcmp(bytes.data(), "glTF", 4) != 0) throw Error(context + ": not a GLB file (bad magic)");
     const uint32_t version = u32le(bytes.data() + 4);
-    if (version != 2) throw SceneError(context + ": GLB version " + std::to_string(version) + " (only 2 is supported)");
+    if (version != 2) throw Error(context + ": GLB version " + std::to_string(version) + " (only 2 is supported)");
     const uint32_t length = u32le(bytes.data() + 8);
     if (length > bytes.size()) {
-      throw SceneError(context + ": truncated GLB (header says " + std::to_string(length) + " bytes, file has " +
+      throw Error(context + ": truncated GLB (header says " + std::to_string(length) + " bytes, file has " +
                        std::to_string(bytes.size()) + ")");
     }
-    if (bytes.size() < 20) throw SceneError(context + ": truncated GLB (no JSON chunk)");
+    if (bytes.size() < 20) throw Error(context + ": truncated GLB (no JSON chunk)");
     const size_t json_length = std::min<size_t>(u32le(bytes.data() + 12), bytes.size() - 20);
     checkJsonDepth({reinterpret_cast<const char*>(bytes.data()) + 20, json_length}, context);
   } else {
@@ -464,9 +465,9 @@ Scene loadGltfBytes(std::span<const uint8_t> bytes, const std::string& context, 
   } catch (const std::exception& e) {
     // nlohmann::json and std containers inside tinygltf may throw on odd input.
     // tinygltf's messages may quote a whole data URI: 200 characters are plenty.
-    throw SceneError(context + ": malformed glTF: " + oneLineMessage(e.what(), 200));
+    throw Error(context + ": malformed glTF: " + oneLineMessage(e.what(), 200));
   }
-  if (!ok) throw SceneError(context + ": malformed glTF: " + oneLineMessage(err, 200));
+  if (!ok) throw Error(context + ": malformed glTF: " + oneLineMessage(err, 200));
   return GltfBuilder(model, context, merge).build();
 }
 

@@ -1,4 +1,4 @@
-// Scene loaders for files. Each throws SceneError with a one-line message that names the file
+// Scene loaders for files. Each throws Error with a one-line message that names the file
 // (and line, for OBJ) on bad input. The *FromMemory forms exist for the fuzzers and tests; `context`
 // is the name used in messages. Loaders fill polygons, face colours, report and (WAD) levels and start
 // eye; loadScene() derives levels and the start eye where a loader leaves them empty.
@@ -31,7 +31,7 @@ std::vector<std::string> wadMapNames(const std::string& path);
 // asked), through assimp (scenes/assimp.cpp). Units and up axis as the file states them, unless
 // options.up_axis / options.unit_scale override; the scene comes out y-up in metres; colours from
 // the materials, node transforms and instancing applied, each mesh instance one object for
-// mesh_merge.h. What was assumed goes into report.notes. SceneError naming the file and assimp's
+// mesh_merge.h. What was assumed goes into report.notes. Error naming the file and assimp's
 // reason on bad input.
 Scene loadAssimp(const std::string& path, const LoadOptions& options);
 // `extension_hint` like "ifc" or "fbx" tells assimp the format of the bytes.
@@ -44,8 +44,5 @@ bool assimpReadsExtension(const std::string& extension);
 // become "; ", control characters go, cut at `max_chars`), and ASCII lower case.
 std::string oneLineMessage(const std::string& text, size_t max_chars = 300);
 std::string asciiLower(std::string s);
-
-// Reads a whole file; SceneError naming the path when it is missing or unreadable.
-std::vector<uint8_t> readFileBytes(const std::string& path);
 
 }  // namespace walkvis

@@ -35,30 +35,24 @@
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 
+#include "core/hash.h"
+
 namespace walkvis {
 namespace {
 
 constexpr double kFloatRounding = 0x1p-24;  // float's unit roundoff (half an ulp, relative)
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-uint64_t bitsOf(double d) {
-  uint64_t b;
-  d += 0.0;  // -0.0 and 0.0 are one position
-  std::memcpy(&b, &d, sizeof b);
-  return b;
-}
-
+// + 0.0 in the hashes: -0.0 and 0.0 are one position.
 struct PositionHash {
   size_t operator()(const glm::dvec3& p) const {
-    uint64_t h = 1469598103934665603ull;
-    for (double d : {p.x, p.y, p.z}) h = (h ^ bitsOf(d)) * 1099511628211ull;
+    const uint64_t h = fnv1aDoubles({p.x + 0.0, p.y + 0.0, p.z + 0.0});
     return static_cast<size_t>(h ^ (h >> 29));
   }
 };
 struct Position2Hash {
   size_t operator()(const glm::dvec2& p) const {
-    uint64_t h = 1469598103934665603ull;
-    for (double d : {p.x, p.y}) h = (h ^ bitsOf(d)) * 1099511628211ull;
+    const uint64_t h = fnv1aDoubles({p.x + 0.0, p.y + 0.0});
     return static_cast<size_t>(h ^ (h >> 29));
   }
 };
@@ -584,23 +578,23 @@ class Merger {
 
 void checkInput(const MeshObjectInput& object, const std::string& context) {
   if (object.face_colors.size() != object.face_sizes.size()) {
-    throw SceneError(context + ": " + std::to_string(object.face_sizes.size()) + " faces but " +
+    throw Error(context + ": " + std::to_string(object.face_sizes.size()) + " faces but " +
                      std::to_string(object.face_colors.size()) + " face colours");
   }
   uint64_t total = 0;
   for (uint32_t s : object.face_sizes) total += s;
   if (total != object.indices.size()) {
-    throw SceneError(context + ": faces need " + std::to_string(total) + " indices, got " +
+    throw Error(context + ": faces need " + std::to_string(total) + " indices, got " +
                      std::to_string(object.indices.size()));
   }
   for (uint32_t i : object.indices) {
     if (i >= object.positions.size()) {
-      throw SceneError(context + ": vertex index " + std::to_string(i) + " out of range (" +
+      throw Error(context + ": vertex index " + std::to_string(i) + " out of range (" +
                        std::to_string(object.positions.size()) + " vertices)");
     }
     const glm::dvec3& p = object.positions[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      throw SceneError(context + ": vertex " + std::to_string(i) + " has a non-finite coordinate (" +
+      throw Error(context + ": vertex " + std::to_string(i) + " has a non-finite coordinate (" +
                        std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
     }
   }

@@ -59,7 +59,7 @@ struct MeshObjectInput {
 // Returns, per input face in order, the face id it became (and appends the same to
 // scene.report.input_to_face when merging). The object's faces get the next object number in
 // scene.face_object. Face ids are given in order of each face's (group's)
-// first input face. Throws SceneError (naming `context`) for non-finite coordinates, indices out of
+// first input face. Throws Error (naming `context`) for non-finite coordinates, indices out of
 // range or mismatched spans.
 std::vector<uint32_t> addMeshObject(Scene& scene, const MeshObjectInput& object, bool merge,
                                     const std::string& context);

@@ -4,7 +4,7 @@
 // Geometry (`v`, `f`, `usemtl`, `mtllib`) is read by a strict line parser here rather than by
 // tinyobjloader: tinyobjloader is lenient (it reads "abc" as 0, clamps or wraps bad indices and
 // reports no line numbers) and keeps positions in float, which cannot hold the 1e6-with-1e-3
-// hard case. Every malformed record therefore gets a one-line SceneError naming file and line.
+// hard case. Every malformed record therefore gets a one-line Error naming file and line.
 // Material libraries are read with tinyobjloader's MTL parser; only the diffuse colour is used.
 // Records a walkthrough does not need (vt, vn, s, l, p, curves) are skipped. Each `o` or `g`
 // record starts a new object for face merging (mesh_merge.h); without any, the file is one object.
@@ -23,6 +23,7 @@
 #define TINYOBJLOADER_IMPLEMENTATION
 #include <tiny_obj_loader.h>
 
+#include "core/byte_io.h"
 #include "scenes/loaders.h"
 #include "scenes/mesh_merge.h"
 #include "scenes/scene.h"
@@ -67,7 +68,7 @@ class ObjParser {
   ObjParser(std::string_view text, const std::string& context) : text_(text), context_(context) {}
 
   [[noreturn]] void fail(const std::string& what) const {
-    throw SceneError(context_ + ":" + std::to_string(line_) + ": " + what);
+    throw Error(context_ + ":" + std::to_string(line_) + ": " + what);
   }
 
   double number(std::string_view token) const {
@@ -107,7 +108,7 @@ class ObjParser {
     // Positive indices may point forward (tinyobjloader and most readers allow it): checked here.
     for (const auto& [line, index] : forward_) {
       if (index > static_cast<int64_t>(vertices_.size())) {
-        throw SceneError(context_ + ":" + std::to_string(line) + ": face index " + std::to_string(index) +
+        throw Error(context_ + ":" + std::to_string(line) + ": face index " + std::to_string(index) +
                          " out of range (" + std::to_string(vertices_.size()) + " vertices)");
       }
     }
@@ -232,7 +233,7 @@ std::map<std::string, uint32_t> readMaterials(const std::vector<std::string>& li
     std::vector<uint8_t> bytes;
     try {
       bytes = readFileBytes(path);
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       report.notes.push_back(std::string("material library skipped: ") + e.what());
       continue;
     }
@@ -251,7 +252,7 @@ Scene buildObj(std::string_view text, const std::string& context, const std::fil
   ObjParser parser(text, context);
   parser.parse();
   if (parser.faces_.empty()) {
-    throw SceneError(context + ": no faces (" + std::to_string(parser.vertices_.size()) + " vertices, no 'f' records)");
+    throw Error(context + ": no faces (" + std::to_string(parser.vertices_.size()) + " vertices, no 'f' records)");
   }
   Scene scene;
   std::vector<std::optional<uint32_t>> material_colors(parser.material_names_.size());

@@ -10,6 +10,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/hash.h"
+
 namespace walkvis {
 namespace {
 
@@ -145,7 +147,7 @@ uint32_t addFace(Scene& scene, std::span<const glm::dvec3> input, uint32_t color
   const uint32_t face_id = newFace(scene, color);
   for (const auto& p : input) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      throw SceneError(context + ": face " + std::to_string(face_id) + " has a non-finite coordinate (" +
+      throw Error(context + ": face " + std::to_string(face_id) + " has a non-finite coordinate (" +
                        std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")");
     }
   }
@@ -239,7 +241,7 @@ uint32_t addPlanarRegion(Scene& scene, const std::vector<std::vector<glm::dvec2>
   for (const auto& ring : rings) {
     for (const auto& p : ring) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
-        throw SceneError(context + ": region " + std::to_string(face_id) + " has a non-finite coordinate");
+        throw Error(context + ": region " + std::to_string(face_id) + " has a non-finite coordinate");
       }
     }
   }
@@ -417,14 +419,7 @@ bool isClosed(const Scene& scene) {
   };
   struct Hash {
     size_t operator()(const Key& k) const {
-      uint64_t h = 1469598103934665603ull;
-      const double vals[6] = {k.a.x, k.a.y, k.a.z, k.b.x, k.b.y, k.b.z};
-      for (double d : vals) {
-        uint64_t bits;
-        std::memcpy(&bits, &d, sizeof bits);
-        h = (h ^ bits) * 1099511628211ull;
-      }
-      return static_cast<size_t>(h);
+      return static_cast<size_t>(fnv1aDoubles({k.a.x, k.a.y, k.a.z, k.b.x, k.b.y, k.b.z}));
     }
   };
   std::unordered_map<Key, int64_t, Hash> edges;

@@ -2,9 +2,9 @@
 // face; floor levels with their walkable regions; an eye height and a start eye. Nothing else
 // (docs/DESIGN.md, "Model only what a scene needs").
 //
-// Conventions (docs/DESIGN.md, "Conventions"): right-handed, y up, the scene's own units. A polygon is convex and
-// planar with >= 3 vertices, counter-clockwise seen from its front; its plane is n·x = d with
-// |n| = 1 and the front half-space n·x > d.
+// Conventions (docs/DESIGN.md, "Conventions"): right-handed, y up, the scene's own units; Plane and
+// Polygon are core/geometry.h's. Loading errors are core/error.h's Error, naming the file (and
+// line, where there is one) and what is wrong.
 #pragma once
 
 #include <cstdint>
@@ -16,20 +16,10 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "core/error.h"
+#include "core/geometry.h"
+
 namespace walkvis {
-
-struct Plane {
-  glm::dvec3 n{0.0, 1.0, 0.0};  // unit normal
-  double d = 0.0;               // n·x = d on the plane
-};
-
-// A convex planar polygon. Its vertices are Scene::vertices[first_vertex, first_vertex + vertex_count).
-struct Polygon {
-  uint32_t first_vertex = 0;
-  uint32_t vertex_count = 0;
-  uint32_t face_id = 0;  // index into Scene::face_colors; fragments keep their input face's id
-  Plane plane;
-};
 
 // A floor level: every distinct floor height gives the height plane y = floor_y + eye height.
 // The walkable region is a union of convex polygons of the xz-plane, stored as (x, z) pairs.
@@ -102,14 +92,8 @@ struct Scene {
   std::span<const glm::dvec3> polygonVertices(size_t i) const { return polygonVertices(polygons[i]); }
 };
 
-// Thrown for bad input while loading or parsing: the message is one line that names the file
-// (and line, where there is one) and what is wrong. The command line prints it and exits 2.
-struct SceneError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 // Walkable floors found the way a navmesh finds them (walkable.h, Recast). Lengths in scene units
-// after unit scaling; < 0 means the default written beside it. Out of range (SceneError): agent
+// after unit scaling; < 0 means the default written beside it. Out of range (Error): agent
 // height not positive or not finite, radius not in [0, 10 × agent height], climb not in
 // [0, agent height), slope not in (0, 90), minimum area negative or not finite.
 struct WalkableOptions {
@@ -140,7 +124,7 @@ struct LoadOptions {
 
 // Loads a scene from one scene argument: `model.obj`, `model.gltf`, `model.glb`,
 // `freedoom2.wad:MAP07` (a bare WAD name is also looked up in /usr/share/games/doom), or
-// `gen:NAME?key=value&...` (generators, see generators.h). Throws SceneError on bad input.
+// `gen:NAME?key=value&...` (generators, see generators.h). Throws Error on bad input.
 Scene loadScene(const std::string& spec, const LoadOptions& options = {});
 
 // ---- Building a scene (used by every loader and generator) ----
@@ -148,7 +132,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options = {});
 // Adds one input face and gives it a new face id (returned). Vertices are in order around the
 // face, counter-clockwise seen from the front; any count. A convex planar face becomes one
 // polygon; a non-convex or non-planar one is split into convex planar pieces (CGAL); a face with
-// fewer than 3 distinct vertices or zero area is dropped and counted. Throws SceneError for NaN or
+// fewer than 3 distinct vertices or zero area is dropped and counted. Throws Error for NaN or
 // infinite coordinates (context names the file or generator in the message).
 uint32_t addFace(Scene& scene, std::span<const glm::dvec3> vertices, uint32_t color,
                  const std::string& context);

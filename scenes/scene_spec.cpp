@@ -45,16 +45,16 @@ Scene generate(const std::string& spec) {
       if (!pair.empty()) {
         const size_t eq = pair.find('=');
         if (eq == std::string::npos || eq == 0) {
-          throw SceneError(spec + ": generator parameter '" + pair + "' is not key=value");
+          throw Error(spec + ": generator parameter '" + pair + "' is not key=value");
         }
         const std::string key = pair.substr(0, eq);
-        if (values.count(key)) throw SceneError(spec + ": generator parameter '" + key + "' given twice");
+        if (values.count(key)) throw Error(spec + ": generator parameter '" + key + "' given twice");
         values[key] = pair.substr(eq + 1);
       }
       start = amp + 1;
     }
   }
-  if (name.empty()) throw SceneError(spec + ": no generator named (e.g. gen:office)");
+  if (name.empty()) throw Error(spec + ": no generator named (e.g. gen:office)");
   GeneratorParams params("gen:" + name, std::move(values));
   Scene scene = generateScene(name, params);
   params.checkAllUsed();
@@ -93,10 +93,10 @@ int64_t GeneratorParams::getInt(const std::string& key, int64_t fallback, int64_
   int64_t value = 0;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
   if (ec != std::errc() || ptr != s.data() + s.size() || s.empty()) {
-    throw SceneError(generator_ + ": parameter " + key + "='" + s + "' is not an integer");
+    throw Error(generator_ + ": parameter " + key + "='" + s + "' is not an integer");
   }
   if (value < lo || value > hi) {
-    throw SceneError(generator_ + ": parameter " + key + "=" + s + " is out of range [" + std::to_string(lo) + ", " +
+    throw Error(generator_ + ": parameter " + key + "=" + s + " is out of range [" + std::to_string(lo) + ", " +
                      std::to_string(hi) + "]");
   }
   return value;
@@ -110,10 +110,10 @@ double GeneratorParams::getDouble(const std::string& key, double fallback, doubl
   double value = 0.0;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
   if (ec != std::errc() || ptr != s.data() + s.size() || s.empty() || !std::isfinite(value)) {
-    throw SceneError(generator_ + ": parameter " + key + "='" + s + "' is not a finite number");
+    throw Error(generator_ + ": parameter " + key + "='" + s + "' is not a finite number");
   }
   if (value < lo || value > hi) {
-    throw SceneError(generator_ + ": parameter " + key + "=" + s + " is out of range [" + std::to_string(lo) + ", " +
+    throw Error(generator_ + ": parameter " + key + "=" + s + " is out of range [" + std::to_string(lo) + ", " +
                      std::to_string(hi) + "]");
   }
   return value;
@@ -124,24 +124,24 @@ void GeneratorParams::checkAllUsed() const {
     if (!used_.count(key)) {
       std::string known;
       for (const auto& k : used_) known += (known.empty() ? "" : ", ") + k;
-      throw SceneError(generator_ + ": unknown parameter '" + key + "' (known: " + known + ")");
+      throw Error(generator_ + ": unknown parameter '" + key + "' (known: " + known + ")");
     }
   }
 }
 
 Scene loadScene(const std::string& spec, const LoadOptions& options) {
   if (!options.loader.empty() && options.loader != "assimp") {
-    throw SceneError(spec + ": unknown loader '" + options.loader + "' (expected assimp, or none for the default)");
+    throw Error(spec + ": unknown loader '" + options.loader + "' (expected assimp, or none for the default)");
   }
   if (options.up_axis != 0 && options.up_axis != 'y' && options.up_axis != 'z') {
-    throw SceneError(spec + ": the up axis must be y or z");
+    throw Error(spec + ": the up axis must be y or z");
   }
   if (options.unit_scale == 0.0 || !std::isfinite(options.unit_scale)) {
-    throw SceneError(spec + ": the unit scale must be a positive finite number");
+    throw Error(spec + ": the unit scale must be a positive finite number");
   }
   const std::string& floors = options.floors;
   if (!floors.empty() && floors != "faces" && floors != "navmesh") {
-    throw SceneError(spec + ": unknown floor method '" + floors + "' (expected faces or navmesh)");
+    throw Error(spec + ": unknown floor method '" + floors + "' (expected faces or navmesh)");
   }
   Scene scene;
   double default_eye = 1.7;
@@ -167,7 +167,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
       if (map.empty()) {
         std::string names;
         for (const auto& n : wadMapNames(path)) names += (names.empty() ? "" : " ") + n;
-        throw SceneError(path + ": name a map, e.g. " + path + ":" +
+        throw Error(path + ": name a map, e.g. " + path + ":" +
                          (names.empty() ? std::string("MAP01") : names.substr(0, names.find(' '))) +
                          " (maps: " + names + ")");
       }
@@ -187,7 +187,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
       scene = loadAssimp(path, options);
       mesh_file = true;
     } else {
-      throw SceneError(spec + ": unknown scene format '" + ext +
+      throw Error(spec + ": unknown scene format '" + ext +
                        "' (expected .obj, .gltf, .glb, FILE.wad:MAP, gen:NAME, or a format assimp reads: "
                        ".ifc, .fbx, .dae, .3ds, .blend, .ply, .stl, .off, ...)");
     }
@@ -200,7 +200,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
   }
   if (scene.polygons.empty()) {
     const uint64_t dropped = scene.report.dropped_degenerate + scene.report.dropped_zero_area;
-    throw SceneError(spec + ": empty scene (no polygons; " + std::to_string(scene.report.input_faces) +
+    throw Error(spec + ": empty scene (no polygons; " + std::to_string(scene.report.input_faces) +
                      " input faces, " + std::to_string(dropped) + " dropped as degenerate or zero-area)");
   }
   scene.name = spec;

@@ -64,14 +64,14 @@ std::string upper(std::string s) {
 
 std::vector<Lump> readDirectory(std::span<const uint8_t> bytes, const std::string& context) {
   if (bytes.size() < 12) {
-    throw SceneError(context + ": truncated WAD header (" + std::to_string(bytes.size()) + " bytes, need 12)");
+    throw Error(context + ": truncated WAD header (" + std::to_string(bytes.size()) + " bytes, need 12)");
   }
   const std::string magic(reinterpret_cast<const char*>(bytes.data()), 4);
-  if (magic != "IWAD" && magic != "PWAD") throw SceneError(context + ": not a WAD file (bad magic)");
+  if (magic != "IWAD" && magic != "PWAD") throw Error(context + ": not a WAD file (bad magic)");
   const int64_t count = readI32(bytes, 4);
   const int64_t offset = readI32(bytes, 8);
   if (count < 0 || offset < 0 || offset + count * 16 > static_cast<int64_t>(bytes.size())) {
-    throw SceneError(context + ": truncated WAD directory (" + std::to_string(count) + " entries at offset " +
+    throw Error(context + ": truncated WAD directory (" + std::to_string(count) + " entries at offset " +
                      std::to_string(offset) + ", file has " + std::to_string(bytes.size()) + " bytes)");
   }
   std::vector<Lump> lumps(static_cast<size_t>(count));
@@ -112,11 +112,11 @@ constexpr std::array<const char*, 5> kMapLumpNames{"THINGS", "LINEDEFS", "SIDEDE
 std::span<const uint8_t> lumpBytes(std::span<const uint8_t> bytes, const Lump& l, size_t record,
                                    const std::string& where) {
   if (l.pos < 0 || l.size < 0 || l.pos + l.size > static_cast<int64_t>(bytes.size())) {
-    throw SceneError(where + ": " + l.name + " lump out of range (" + std::to_string(l.size) + " bytes at offset " +
+    throw Error(where + ": " + l.name + " lump out of range (" + std::to_string(l.size) + " bytes at offset " +
                      std::to_string(l.pos) + ", file has " + std::to_string(bytes.size()) + " bytes)");
   }
   if (l.size % static_cast<int64_t>(record) != 0) {
-    throw SceneError(where + ": malformed " + l.name + " lump (" + std::to_string(l.size) +
+    throw Error(where + ": malformed " + l.name + " lump (" + std::to_string(l.size) +
                      " bytes is not a multiple of " + std::to_string(record) + ")");
   }
   return bytes.subspan(static_cast<size_t>(l.pos), static_cast<size_t>(l.size));
@@ -251,11 +251,11 @@ class MappedFile {
  public:
   explicit MappedFile(const std::string& path) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw SceneError(path + ": cannot open (" + std::strerror(errno) + ")");
+    if (fd < 0) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
     struct stat st {};
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
       ::close(fd);
-      throw SceneError(path + ": not a regular file");
+      throw Error(path + ": not a regular file");
     }
     size_ = static_cast<size_t>(st.st_size);
     if (size_ > 0) {
@@ -263,7 +263,7 @@ class MappedFile {
       if (data_ == MAP_FAILED) {
         const int err = errno;
         ::close(fd);
-        throw SceneError(path + ": cannot map (" + std::strerror(err) + ")");
+        throw Error(path + ": cannot map (" + std::strerror(err) + ")");
       }
     }
     ::close(fd);
@@ -281,27 +281,6 @@ class MappedFile {
 };
 
 }  // namespace
-
-std::vector<uint8_t> readFileBytes(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw SceneError(path + ": is a directory, not a file");
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw SceneError(path + ": cannot open (" + std::strerror(errno) + ")");
-  // Read in growing blocks rather than trusting a size up front: the file may be a pipe or change.
-  std::vector<uint8_t> bytes;
-  size_t used = 0;
-  for (;;) {
-    if (used == bytes.size()) bytes.resize(std::max<size_t>(1 << 20, 2 * bytes.size()));
-    const size_t got = std::fread(bytes.data() + used, 1, bytes.size() - used, f);
-    used += got;
-    if (got == 0) break;
-  }
-  bytes.resize(used);
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) throw SceneError(path + ": read error");
-  return bytes;
-}
 
 std::vector<std::string> wadMapNames(const std::string& path) {
   const MappedFile file(path);
@@ -321,10 +300,10 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
     if (lumps[i].name == map && (lumps[i + 1].name == "THINGS" || lumps[i + 1].name == "TEXTMAP")) marker = i;
   }
   if (marker == lumps.size()) {
-    throw SceneError(context + ": has no map " + map + "; " + describeMaps(mapNames(lumps)));
+    throw Error(context + ": has no map " + map + "; " + describeMaps(mapNames(lumps)));
   }
   const std::string where = context + ":" + map;
-  if (lumps[marker + 1].name == "TEXTMAP") throw SceneError(where + ": UDMF (TEXTMAP) maps are not supported");
+  if (lumps[marker + 1].name == "TEXTMAP") throw Error(where + ": UDMF (TEXTMAP) maps are not supported");
 
   // The map's lumps follow its marker, up to the next lump that is not a map lump.
   static constexpr std::array<const char*, 12> kAllMapLumps{"THINGS", "LINEDEFS", "SIDEDEFS", "VERTEXES",
@@ -339,9 +318,9 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
       if (name == kMapLumpNames[k] && !ml.lump[k]) ml.lump[k] = lumps[i];
     }
   }
-  if (ml.hexen) throw SceneError(where + ": Hexen-format maps are not supported");
+  if (ml.hexen) throw Error(where + ": Hexen-format maps are not supported");
   for (size_t k = 0; k < kMapLumpNames.size(); ++k) {
-    if (!ml.lump[k]) throw SceneError(where + ": map has no " + std::string(kMapLumpNames[k]) + " lump");
+    if (!ml.lump[k]) throw Error(where + ": map has no " + std::string(kMapLumpNames[k]) + " lump");
   }
   const auto things = lumpBytes(bytes, *ml.lump[0], kThingSize, where);
   const auto linedefs = lumpBytes(bytes, *ml.lump[1], kLinedefSize, where);
@@ -349,7 +328,7 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
   const auto vertexes = lumpBytes(bytes, *ml.lump[3], kVertexSize, where);
   const auto sectors_raw = lumpBytes(bytes, *ml.lump[4], kSectorSize, where);
   if (linedefs.empty() || vertexes.empty() || sectors_raw.empty() || sidedefs.empty()) {
-    throw SceneError(where + ": empty map (" + std::to_string(linedefs.size() / kLinedefSize) + " linedefs, " +
+    throw Error(where + ": empty map (" + std::to_string(linedefs.size() / kLinedefSize) + " linedefs, " +
                      std::to_string(vertexes.size() / kVertexSize) + " vertices, " +
                      std::to_string(sidedefs.size() / kSidedefSize) + " sidedefs, " +
                      std::to_string(sectors_raw.size() / kSectorSize) + " sectors)");
@@ -370,12 +349,12 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
   auto sideSector = [&](uint16_t side, size_t line) -> int32_t {
     if (side == kNoSide) return -1;
     if (side >= nsides) {
-      throw SceneError(where + ": linedef " + std::to_string(line) + " names sidedef " + std::to_string(side) +
+      throw Error(where + ": linedef " + std::to_string(line) + " names sidedef " + std::to_string(side) +
                        " (out of range; the map has " + std::to_string(nsides) + ")");
     }
     const uint16_t sec = readU16(sidedefs, kSidedefSize * side + 28);
     if (sec >= sectors.size()) {
-      throw SceneError(where + ": sidedef " + std::to_string(side) + " names sector " + std::to_string(sec) +
+      throw Error(where + ": sidedef " + std::to_string(side) + " names sector " + std::to_string(sec) +
                        " (out of range; the map has " + std::to_string(sectors.size()) + ")");
     }
     return sec;
@@ -394,7 +373,7 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
     l.v1 = readU16(linedefs, at);
     l.v2 = readU16(linedefs, at + 2);
     if (l.v1 >= verts.size() || l.v2 >= verts.size()) {
-      throw SceneError(where + ": linedef " + std::to_string(i) + " names vertex " +
+      throw Error(where + ": linedef " + std::to_string(i) + " names vertex " +
                        std::to_string(std::max(l.v1, l.v2)) + " (out of range; the map has " +
                        std::to_string(verts.size()) + ")");
     }
@@ -462,7 +441,7 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
     if (!sectors[s].open()) continue;
     crossings += countCrossings(boundary[s], kMaxCrossings - crossings);
     if (crossings >= kMaxCrossings) {
-      throw SceneError(where + ": sector lines cross each other " + std::to_string(kMaxCrossings) +
+      throw Error(where + ": sector lines cross each other " + std::to_string(kMaxCrossings) +
                        " times or more (corrupt map)");
     }
   }
@@ -508,7 +487,7 @@ Scene loadWadMapFromMemory(std::span<const uint8_t> bytes, const std::string& ma
   for (auto& [y, level] : levels) {
     if (!level.walkable.empty()) scene.levels.push_back(std::move(level));
   }
-  if (scene.polygons.empty()) throw SceneError(where + ": empty map (no walls, floors or ceilings)");
+  if (scene.polygons.empty()) throw Error(where + ": empty map (no walls, floors or ceilings)");
 
   // Player 1 start: the sector around it gives the floor.
   std::optional<size_t> start;

@@ -149,21 +149,21 @@ std::string fmt(const char* format, double a, double b = 0.0, double c = 0.0, do
 void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const double eye = scene.eye_height;
-  if (!(eye > 0.0) || !std::isfinite(eye)) throw SceneError(scene.name + ": the eye height must be positive");
+  if (!(eye > 0.0) || !std::isfinite(eye)) throw Error(scene.name + ": the eye height must be positive");
   const double agent_height = options.agent_height < 0.0 ? 1.2 * eye : options.agent_height;
   const double radius = options.agent_radius < 0.0 ? 0.15 * eye : options.agent_radius;
   const double climb = options.max_climb < 0.0 ? 0.2 * eye : options.max_climb;
   const double slope = options.max_slope_deg;
   const double min_area = options.min_level_area < 0.0 ? 0.35 * eye * eye : options.min_level_area;
   if (!(agent_height > 0.0) || !std::isfinite(agent_height))
-    throw SceneError(scene.name + ": the agent height must be a positive finite number");
+    throw Error(scene.name + ": the agent height must be a positive finite number");
   if (!(radius >= 0.0) || !std::isfinite(radius) || radius > 10.0 * agent_height)
-    throw SceneError(scene.name + ": the agent radius must be in [0, 10 x agent height]");
+    throw Error(scene.name + ": the agent radius must be in [0, 10 x agent height]");
   if (!(climb >= 0.0) || !(climb < agent_height))
-    throw SceneError(scene.name + ": the maximum climb must be in [0, agent height)");
-  if (!(slope > 0.0 && slope < 90.0)) throw SceneError(scene.name + ": the maximum slope must be in (0, 90) degrees");
+    throw Error(scene.name + ": the maximum climb must be in [0, agent height)");
+  if (!(slope > 0.0 && slope < 90.0)) throw Error(scene.name + ": the maximum slope must be in (0, 90) degrees");
   if (!(min_area >= 0.0) || !std::isfinite(min_area))
-    throw SceneError(scene.name + ": the minimum level area must be a finite number >= 0");
+    throw Error(scene.name + ": the minimum level area must be a finite number >= 0");
 
   scene.levels.clear();
   scene.connections.clear();
@@ -194,7 +194,7 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
                          static_cast<float>(-cs + depth * cs)};
   if (!hf || !chf || !rcCreateHeightfield(&ctx, *hf, width, depth, bmin, bmax, static_cast<float>(cs),
                                           static_cast<float>(ch)))
-    throw SceneError(scene.name + ": out of memory for the walkable heightfield");
+    throw Error(scene.name + ": out of memory for the walkable heightfield");
   {
     std::vector<float> verts(scene.vertices.size() * 3);
     for (size_t i = 0; i < scene.vertices.size(); ++i) {
@@ -216,16 +216,16 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
                             tris.data(), nt, areas.data());
     if (!rcRasterizeTriangles(&ctx, verts.data(), static_cast<int>(scene.vertices.size()), tris.data(), areas.data(),
                               nt, *hf, walk_climb))
-      throw SceneError(scene.name + ": Recast could not rasterize the scene");
+      throw Error(scene.name + ": Recast could not rasterize the scene");
   }
   rcFilterLowHangingWalkableObstacles(&ctx, walk_climb, *hf);
   rcFilterLedgeSpans(&ctx, walk_height, walk_climb, *hf);
   rcFilterWalkableLowHeightSpans(&ctx, walk_height, *hf);
   if (!rcBuildCompactHeightfield(&ctx, walk_height, walk_climb, *hf, *chf))
-    throw SceneError(scene.name + ": Recast could not build the compact heightfield");
+    throw Error(scene.name + ": Recast could not build the compact heightfield");
   hf.reset();
   if (walk_radius > 0 && !rcErodeWalkableArea(&ctx, walk_radius, *chf))
-    throw SceneError(scene.name + ": Recast could not erode the walkable area");
+    throw Error(scene.name + ": Recast could not erode the walkable area");
 
   const int span_count = chf->spanCount;
   std::vector<int> span_x(span_count), span_z(span_count);

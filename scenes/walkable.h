@@ -25,7 +25,7 @@ namespace walkvis {
 //    (common in IFC models) is one. One FloorLevel per height, with all its areas' pieces.
 //  * Walkable cells of seeded regions on no level (treads, ramps, small landings) form connections.
 // Notes the parameters, cell size, grid and what was filtered in scene.report.notes. Throws
-// SceneError (naming scene.name) when the options are out of range.
+// Error (naming scene.name) when the options are out of range.
 void deriveWalkableLevels(Scene& scene, const WalkableOptions& options);
 
 }  // namespace walkvis

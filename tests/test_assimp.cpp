@@ -299,7 +299,7 @@ TEST(Assimp, BadFilesAreSceneErrorsNamingTheFile) {
     try {
       loadAssimp(path, LoadOptions{});
       ADD_FAILURE() << path << " loaded";
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       const std::string what = e.what();
       EXPECT_EQ(what.rfind(path, 0), 0u) << what;
       EXPECT_NE(what.find(part), std::string::npos) << what;
@@ -332,7 +332,7 @@ TEST(Assimp, BadFilesAreSceneErrorsNamingTheFile) {
     loadAssimpFromMemory(std::span<const uint8_t>(reinterpret_cast<const uint8_t*>(junk.data()), junk.size()), "ply",
                          "memory.ply", LoadOptions{});
     ADD_FAILURE() << "junk loaded";
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind("memory.ply: ", 0), 0u) << e.what();
   }
 }

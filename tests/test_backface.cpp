@@ -182,7 +182,7 @@ TEST(Backface, ConeCullsFrontFacesOnlyOfZeroArea) {
   coneInvisiblePolygons(input, invisible);
   for (size_t p = 0; p < s.polygons.size(); ++p) EXPECT_EQ(invisible[p], p >= real ? 1 : 0) << p;
   std::vector<uint8_t> too_short(1);
-  EXPECT_THROW(coneInvisiblePolygons(input, too_short), SceneError);
+  EXPECT_THROW(coneInvisiblePolygons(input, too_short), Error);
 
   const auto culler = makeBackfaceCuller(BackfaceMethod::kCone, input);
   std::vector<uint8_t> units(culler->unitCount()), culled(s.polygons.size());
@@ -307,11 +307,11 @@ TEST(Backface, EmptyInputAndBadOptions) {
   const Scene s = loadScene("gen:sphere?tris=80");
   BackfaceOptions bad;
   bad.mask_resolution = 19;
-  EXPECT_THROW(makeBackfaceCuller(BackfaceMethod::kMask, backfaceInput(s), bad), SceneError);
+  EXPECT_THROW(makeBackfaceCuller(BackfaceMethod::kMask, backfaceInput(s), bad), Error);
   bad = {};
   bad.cluster_tr = -1.0;
-  EXPECT_THROW(makeBackfaceCuller(BackfaceMethod::kCluster, backfaceInput(s), bad), SceneError);
-  EXPECT_THROW(parseBackfaceMethod("nope"), SceneError);
+  EXPECT_THROW(makeBackfaceCuller(BackfaceMethod::kCluster, backfaceInput(s), bad), Error);
+  EXPECT_THROW(parseBackfaceMethod("nope"), Error);
   EXPECT_EQ(parseBackfaceMethod("cluster"), BackfaceMethod::kCluster);
 }
 
@@ -403,8 +403,8 @@ TEST(Backface, ClusterTrFollowsThePolygonCount) {
   EXPECT_NEAR(clusterTrFor(16000, 0.0), 0.5, 1e-12);
   EXPECT_EQ(clusterTrFor(1000000, 0.0), 0.25);
   EXPECT_EQ(clusterTrFor(70000, 2.5), 2.5);
-  EXPECT_THROW(clusterTrFor(100, -1.0), SceneError);
-  EXPECT_THROW(clusterTrFor(100, NAN), SceneError);
+  EXPECT_THROW(clusterTrFor(100, -1.0), Error);
+  EXPECT_THROW(clusterTrFor(100, NAN), Error);
   double last = 2.0;
   for (size_t n = 1; n < 10000000; n = n * 3 / 2 + 1) {
     const double tr = clusterTrFor(n, 0.0);

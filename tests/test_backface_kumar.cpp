@@ -216,7 +216,7 @@ TEST(BackfaceKumar, EmptyInputAndBadOptions) {
   const Scene s = loadScene("gen:sphere?tris=80");
   BackfaceOptions bad;
   bad.hierarchy_leaf_size = 0;
-  EXPECT_THROW(makeBackfaceCuller(BackfaceMethod::kHierarchy, backfaceInput(s), bad), SceneError);
+  EXPECT_THROW(makeBackfaceCuller(BackfaceMethod::kHierarchy, backfaceInput(s), bad), Error);
   EXPECT_EQ(parseBackfaceMethod("hierarchy"), BackfaceMethod::kHierarchy);
 }
 

@@ -17,6 +17,7 @@
 #include <glm/geometric.hpp>
 
 #include "bsp/bsp.h"
+#include "core/byte_io.h"
 #include "bsp/exact_sign.h"
 #include "scenes/generators.h"
 #include "scenes/loaders.h"
@@ -398,7 +399,7 @@ TEST(Bsp, SaveLoadRoundTripsExactly) {
   EXPECT_NO_THROW(checkBspMatchesScene(loaded, scene, path));
   Scene other = scene;
   other.vertices[0].x += 1e-12;
-  EXPECT_THROW(checkBspMatchesScene(loaded, other, path), SceneError);
+  EXPECT_THROW(checkBspMatchesScene(loaded, other, path), Error);
   EXPECT_EQ(loaded.stats.ratio, tree.stats.ratio);
   EXPECT_EQ(loaded.stats.depth_max, tree.stats.depth_max);
   std::vector<uint32_t> a, b;
@@ -422,11 +423,11 @@ TEST(Bsp, CorruptFilesAreClearErrors) {
   for (size_t i = 0; i < good.size(); i += std::max<size_t>(1, good.size() / 97)) {
     std::vector<uint8_t> bad = good;
     bad[i] ^= 0x5a;
-    EXPECT_THROW(loadBspFromMemory(bad, "flip"), SceneError) << "byte " << i;
+    EXPECT_THROW(loadBspFromMemory(bad, "flip"), Error) << "byte " << i;
   }
   for (size_t len : {size_t{0}, size_t{5}, size_t{20}, size_t{40}, good.size() / 2, good.size() - 1}) {
     std::vector<uint8_t> cut(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(len));
-    EXPECT_THROW(loadBspFromMemory(cut, "cut"), SceneError) << "length " << len;
+    EXPECT_THROW(loadBspFromMemory(cut, "cut"), Error) << "length " << len;
   }
   {
     std::vector<uint8_t> v2 = good;
@@ -434,7 +435,7 @@ TEST(Bsp, CorruptFilesAreClearErrors) {
     try {
       loadBspFromMemory(v2, "v2.bsp");
       ADD_FAILURE() << "version 2 accepted";
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("v2.bsp"), std::string::npos) << e.what();
     }
@@ -443,9 +444,9 @@ TEST(Bsp, CorruptFilesAreClearErrors) {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(good.data()), static_cast<std::streamsize>(good.size() - 3));
   }
-  EXPECT_THROW(loadBsp(path), SceneError);
+  EXPECT_THROW(loadBsp(path), Error);
   std::filesystem::remove(path);
-  EXPECT_THROW(loadBsp(path), SceneError);
+  EXPECT_THROW(loadBsp(path), Error);
 }
 
 TEST(Bsp, StatisticsAndHeuristicBeatsRandomOnWalls) {
@@ -652,9 +653,9 @@ TEST(Bsp, EmptySceneAndBadPlanes) {
 
   Scene bad = randomScene(3, 3);
   bad.polygons[1].plane.n = glm::dvec3(0.0);
-  EXPECT_THROW(buildBsp(bad), SceneError);
+  EXPECT_THROW(buildBsp(bad), Error);
   bad.polygons[1].plane.n = glm::dvec3(NAN, 0, 0);
-  EXPECT_THROW(buildBsp(bad), SceneError);
+  EXPECT_THROW(buildBsp(bad), Error);
 }
 
 TEST(Bsp, OfficeScene) {
@@ -696,7 +697,7 @@ TEST(Bsp, HardCases) {
     Scene scene;
     try {
       scene = loadScene("gen:" + name);
-    } catch (const SceneError&) {
+    } catch (const Error&) {
       continue;  // NaN / infinite input is rejected by the loader already
     }
     if (scene.polygons.empty()) continue;

@@ -99,7 +99,7 @@ TEST(CameraPathCsv, BadFilesNameFileAndLine) {
     try {
       loadCameraPath(file);
       ADD_FAILURE() << "accepted: " << c.text.substr(0, 80);
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       const std::string msg = e.what();
       EXPECT_NE(msg.find(file), std::string::npos) << msg;
       EXPECT_NE(msg.find(c.expect), std::string::npos) << msg << " (expected " << c.expect << ")";
@@ -107,8 +107,8 @@ TEST(CameraPathCsv, BadFilesNameFileAndLine) {
     }
   }
   std::filesystem::remove(file);
-  EXPECT_THROW(loadCameraPath(tempFile("does_not_exist.csv")), SceneError);
-  EXPECT_THROW(saveCameraPath({}, "/nonexistent_dir_walkvis/x.csv"), SceneError);
+  EXPECT_THROW(loadCameraPath(tempFile("does_not_exist.csv")), Error);
+  EXPECT_THROW(saveCameraPath({}, "/nonexistent_dir_walkvis/x.csv"), Error);
 }
 
 // Brute force: does the segment a→b cross any non-horizontal fragment (inside it)?

@@ -218,24 +218,24 @@ TEST(Generators, OfficeWallsFaceTheWalkableSpace) {
 }
 
 TEST(Generators, OfficeRejectsBadParameters) {
-  EXPECT_THROW(gen("office", {{"rooms", "0"}}), SceneError);
-  EXPECT_THROW(gen("office", {{"rooms", "ten"}}), SceneError);
-  EXPECT_THROW(gen("office", {{"floors", "1000"}}), SceneError);
-  EXPECT_THROW(gen("office", {{"height", "1"}}), SceneError);
-  EXPECT_THROW(gen("office", {{"colour", "red"}}), SceneError);
-  EXPECT_THROW(gen("office", {{"rooms", "200000"}, {"furniture", "40"}}), SceneError);  // size limit
+  EXPECT_THROW(gen("office", {{"rooms", "0"}}), Error);
+  EXPECT_THROW(gen("office", {{"rooms", "ten"}}), Error);
+  EXPECT_THROW(gen("office", {{"floors", "1000"}}), Error);
+  EXPECT_THROW(gen("office", {{"height", "1"}}), Error);
+  EXPECT_THROW(gen("office", {{"colour", "red"}}), Error);
+  EXPECT_THROW(gen("office", {{"rooms", "200000"}, {"furniture", "40"}}), Error);  // size limit
   try {
     gen("office", {{"room_size", "-4"}});
     ADD_FAILURE() << "no throw";
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("gen:office"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("room_size"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(gen("nosuch"), SceneError);
-  EXPECT_THROW(gen("hard:nosuch"), SceneError);
-  EXPECT_THROW(gen("sphere", {{"tris", "5"}}), SceneError);
-  EXPECT_THROW(gen("dome", {{"cut", "1.5"}}), SceneError);
-  EXPECT_THROW(gen("ninefacet", {{"seed", "1"}}), SceneError);
+  EXPECT_THROW(gen("nosuch"), Error);
+  EXPECT_THROW(gen("hard:nosuch"), Error);
+  EXPECT_THROW(gen("sphere", {{"tris", "5"}}), Error);
+  EXPECT_THROW(gen("dome", {{"cut", "1.5"}}), Error);
+  EXPECT_THROW(gen("ninefacet", {{"seed", "1"}}), Error);
 }
 
 TEST(Generators, SphereIsClosedWithOutwardTriangles) {
@@ -310,7 +310,7 @@ TEST(Generators, HardCasesLoadOrThrowClearly) {
       try {
         loadScene("gen:" + name);
         ADD_FAILURE() << "no throw";
-      } catch (const SceneError& e) {
+      } catch (const Error& e) {
         const std::string msg = e.what();
         EXPECT_NE(msg.find("gen:" + name), std::string::npos) << msg;
         EXPECT_NE(msg.find("non-finite"), std::string::npos) << msg;

@@ -450,7 +450,7 @@ void expectBatchEqualsSingles(const Scene& s, uint64_t seed) {
     std::vector<uint32_t> out{1u};
     const uint32_t bad = static_cast<uint32_t>(ranges.size());
     const std::vector<uint32_t> bad_ids{0u, bad};
-    EXPECT_THROW(batch.cullRanges(bad_ids, BackfaceView{}, out), SceneError);
+    EXPECT_THROW(batch.cullRanges(bad_ids, BackfaceView{}, out), Error);
     EXPECT_EQ(out, std::vector<uint32_t>{1u});  // unchanged
   }
 }
@@ -593,20 +593,20 @@ TEST(ListCull, BadInput) {
   const std::vector<uint32_t> indices{0, 1, 2};
   const std::vector<IndexRange> ok{{0, 3}, {3, 0}};
   const std::vector<IndexRange> outside{{2, 2}};
-  EXPECT_THROW(ListCuller::build(input, indices, outside, ListCullMethod::kPolygon), SceneError);
+  EXPECT_THROW(ListCuller::build(input, indices, outside, ListCullMethod::kPolygon), Error);
   const std::vector<uint32_t> bad_index{0, static_cast<uint32_t>(s.polygons.size())};
-  EXPECT_THROW(ListCuller::build(input, bad_index, ok, ListCullMethod::kPolygon), SceneError);
+  EXPECT_THROW(ListCuller::build(input, bad_index, ok, ListCullMethod::kPolygon), Error);
   BackfaceOptions bad_n;
   bad_n.mask_resolution = 19;
-  EXPECT_THROW(ListCuller::build(input, indices, ok, ListCullMethod::kMask, bad_n), SceneError);
-  EXPECT_THROW(parseListCullMethod("cone"), SceneError);
+  EXPECT_THROW(ListCuller::build(input, indices, ok, ListCullMethod::kMask, bad_n), Error);
+  EXPECT_THROW(parseListCullMethod("cone"), Error);
   EXPECT_EQ(parseListCullMethod("region"), ListCullMethod::kRegion);
   for (const CullSetup& setup : cullSetups()) {
     const ListCuller culler = ListCuller::build(input, indices, ok, setup.method, setup.options);
     std::vector<uint32_t> out;
     EXPECT_EQ(culler.cullRange(1, BackfaceView{}, out), 0u);
     EXPECT_TRUE(out.empty());
-    EXPECT_THROW(culler.cullRange(2, BackfaceView{}, out), SceneError);
+    EXPECT_THROW(culler.cullRange(2, BackfaceView{}, out), Error);
     const ListCuller empty = ListCuller::build(input, {}, {}, setup.method, setup.options);
     EXPECT_EQ(empty.rangeCount(), 0u);
   }

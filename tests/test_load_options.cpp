@@ -106,7 +106,7 @@ TEST(LoadOptions, BadValuesAreOneLineErrorsNamingTheScene) {
     try {
       loadScene(kRoom, o);
       ADD_FAILURE() << "no error for " << what;
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       const std::string msg = e.what();
       EXPECT_NE(msg.find(kRoom), std::string::npos) << msg;
       EXPECT_NE(msg.find(what), std::string::npos) << msg;

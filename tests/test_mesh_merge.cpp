@@ -539,15 +539,15 @@ TEST(MeshMerge, DegenerateFacesAreCountedAndInputIsChecked) {
   const std::vector<uint32_t> idx = {0, 1, 3}, sizes = {3}, colors = {0};
   try {
     addMeshObject(bad, {pos, idx, sizes, colors}, true, "obj.obj");
-    ADD_FAILURE() << "no SceneError";
-  } catch (const SceneError& e) {
+    ADD_FAILURE() << "no Error";
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("obj.obj"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("out of range"), std::string::npos);
   }
   const std::vector<glm::dvec3> nan = {{0, 0, 0}, {1, 0, 0}, {0, std::nan(""), 0}};
   const std::vector<uint32_t> idx2 = {0, 1, 2};
-  EXPECT_THROW(addMeshObject(bad, {nan, idx2, sizes, colors}, true, "n.obj"), SceneError);
-  EXPECT_THROW(addMeshObject(bad, {nan, idx2, sizes, colors}, false, "n.obj"), SceneError);
+  EXPECT_THROW(addMeshObject(bad, {nan, idx2, sizes, colors}, true, "n.obj"), Error);
+  EXPECT_THROW(addMeshObject(bad, {nan, idx2, sizes, colors}, false, "n.obj"), Error);
 }
 
 TEST(MeshMerge, ObjGroupsAreObjects) {

@@ -197,7 +197,7 @@ TEST(MeshObject, ObjectSets) {
   EXPECT_EQ(parseObjectSet("none"), ObjectSet::kNone);
   EXPECT_EQ(parseObjectSet("blob"), ObjectSet::kBlob);
   EXPECT_EQ(parseObjectSet("auto"), ObjectSet::kAuto);
-  EXPECT_THROW(parseObjectSet("teapot"), SceneError);
+  EXPECT_THROW(parseObjectSet("teapot"), Error);
   const Scene& scene = office().scene;
   EXPECT_TRUE(makeObjects(ObjectSet::kNone, "gen:office", scene, 7).empty());
   EXPECT_TRUE(makeObjects(ObjectSet::kAuto, "freedoom2.wad:MAP01", scene, 7).empty());
@@ -205,7 +205,7 @@ TEST(MeshObject, ObjectSets) {
   ASSERT_EQ(blob.size(), 1u);
   EXPECT_EQ(blob[0].first_id, 7u);
   Scene no_levels;
-  EXPECT_THROW(makeObjects(ObjectSet::kBlob, "empty", no_levels, 0), SceneError);
+  EXPECT_THROW(makeObjects(ObjectSet::kBlob, "empty", no_levels, 0), Error);
   EXPECT_TRUE(makeObjects(ObjectSet::kAuto, "gen:office", no_levels, 0).empty());
 }
 

@@ -1,5 +1,5 @@
 // OBJ and glTF loaders: committed models, in-memory variants, the error messages for malformed
-// input (file and line), and seeded mutations of valid files that must load or throw SceneError.
+// input (file and line), and seeded mutations of valid files that must load or throw Error.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "core/byte_io.h"
 #include "scenes/loaders.h"
 #include "scenes/scene.h"
 
@@ -41,10 +42,10 @@ void expectOutward(const Scene& scene, glm::dvec3 centre) {
 std::string expectSceneError(const std::function<void()>& f) {
   try {
     f();
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     return e.what();
   }
-  ADD_FAILURE() << "no SceneError";
+  ADD_FAILURE() << "no Error";
   return "";
 }
 
@@ -202,7 +203,7 @@ TEST(Obj, MissingFileIsNamed) {
   EXPECT_NE(msg.find("/nonexistent/dir/model.obj"), std::string::npos) << msg;
 }
 
-// Seeded random edits of a valid file: each result loads or throws SceneError, nothing else.
+// Seeded random edits of a valid file: each result loads or throws Error, nothing else.
 TEST(Obj, MutatedFilesLoadOrThrowSceneError) {
   const std::string base = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf -5 -4 -1\nusemtl a\nf 1/1/1 2//2 5\n";
   const std::string alphabet = "v f0123456789-+./ \n#eE";
@@ -222,7 +223,7 @@ TEST(Obj, MutatedFilesLoadOrThrowSceneError) {
     try {
       loadObjFromMemory(text, "m.obj");
       ++loaded;
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       ++rejected;
       EXPECT_EQ(std::string(e.what()).rfind("m.obj", 0), 0u) << e.what();
     }
@@ -459,7 +460,7 @@ TEST(Gltf, InstancingBeyondTheTriangleCapIsRefusedBeforeBuilding) {
   EXPECT_EQ(s.report.dropped_degenerate, 100000u);
 }
 
-// Seeded random byte edits of the committed .glb and .gltf: load or SceneError, nothing else.
+// Seeded random byte edits of the committed .glb and .gltf: load or Error, nothing else.
 TEST(Gltf, MutatedFilesLoadOrThrowSceneError) {
   for (const char* name : {"cube.glb", "cube.gltf"}) {
     const std::vector<uint8_t> base = readFileBytes(kModels + name);
@@ -481,7 +482,7 @@ TEST(Gltf, MutatedFilesLoadOrThrowSceneError) {
       try {
         loadGltfFromMemory(bytes, name, binary);
         ++loaded;
-      } catch (const SceneError& e) {
+      } catch (const Error& e) {
         ++rejected;
         EXPECT_EQ(std::string(e.what()).rfind(name, 0), 0u) << e.what();
       }

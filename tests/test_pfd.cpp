@@ -354,7 +354,7 @@ void checkScene(const std::string& spec, uint32_t eyes, uint64_t budget = 256ull
   Scene scene;
   try {
     scene = loadScene(spec);
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     GTEST_SKIP() << spec << ": " << e.what();
   }
   const BspTree bsp = buildBsp(scene);
@@ -388,7 +388,7 @@ TEST(Pfd, HardCasesMatchBspOrder) {
     Scene scene;
     try {
       scene = loadScene("gen:" + name);
-    } catch (const SceneError&) {
+    } catch (const Error&) {
       continue;  // a case the loader rejects has no tree to check
     }
     const BspTree bsp = buildBsp(scene);
@@ -411,7 +411,7 @@ TEST(Pfd, ParallelLevelsEqualOneByOne) {
   Scene scene;
   try {
     scene = loadScene("freedoom2.wad:MAP30");
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     GTEST_SKIP() << e.what();
   }
   ASSERT_GT(scene.levels.size(), 2u);
@@ -740,13 +740,13 @@ TEST(Pfd, TreeFileRoundTripAndCorruption) {
   for (size_t i = 0; i < bytes.size(); i += std::max<size_t>(1, bytes.size() / 97)) {
     std::vector<uint8_t> bad = bytes;
     bad[i] ^= 0x5a;
-    EXPECT_THROW(loadTreeFileFromMemory(bad, "corrupt"), SceneError) << "byte " << i;
+    EXPECT_THROW(loadTreeFileFromMemory(bad, "corrupt"), Error) << "byte " << i;
   }
   for (size_t n : {size_t{0}, size_t{7}, bytes.size() / 2, bytes.size() - 1}) {
     std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n));
-    EXPECT_THROW(loadTreeFileFromMemory(cut, "truncated"), SceneError) << n;
+    EXPECT_THROW(loadTreeFileFromMemory(cut, "truncated"), Error) << n;
   }
-  EXPECT_THROW(loadTreeFile(path + ".missing"), SceneError);
+  EXPECT_THROW(loadTreeFile(path + ".missing"), Error);
   std::filesystem::remove(path);
 }
 
@@ -795,15 +795,15 @@ TEST(Pfd, SequencesShareSubOrders) {
     const uint32_t saved = bad.seq_items[bad.seqs[last].first];
     bad.seq_items[bad.seqs[last].first] = last | kPfdSeqBit;
     saveTreeFile(file, path);
-    EXPECT_THROW(loadTreeFile(path), SceneError);
+    EXPECT_THROW(loadTreeFile(path), Error);
     bad.seq_items[bad.seqs[last].first] = saved;
     bad.seqs[last].length += 1;
     saveTreeFile(file, path);
-    EXPECT_THROW(loadTreeFile(path), SceneError);
+    EXPECT_THROW(loadTreeFile(path), Error);
     bad.seqs[last].length -= 1;
     bad.run_refs.push_back(static_cast<uint32_t>(bad.seqs.size()) | kPfdSeqBit);
     saveTreeFile(file, path);
-    EXPECT_THROW(loadTreeFile(path), SceneError);
+    EXPECT_THROW(loadTreeFile(path), Error);
     std::filesystem::remove(path);
   }
   EXPECT_TRUE(any_seqs);
@@ -935,15 +935,15 @@ TEST(Pfd, HfdObjectsAreSubsequenceAndLoadChecked) {
   const int32_t child = bad.object_nodes[with_child].back;
   bad.object_nodes[with_child].back = static_cast<int32_t>(with_child);  // a loop
   saveTreeFile(file, path);
-  EXPECT_THROW(loadTreeFile(path), SceneError);
+  EXPECT_THROW(loadTreeFile(path), Error);
   bad.object_nodes[with_child].back = child;
   bad.objects[0].fragments += 1;
   saveTreeFile(file, path);
-  EXPECT_THROW(loadTreeFile(path), SceneError);
+  EXPECT_THROW(loadTreeFile(path), Error);
   bad.objects[0].fragments -= 1;
   bad.run_refs.push_back(static_cast<uint32_t>(bad.objects.size()) | kPfdObjectBit);
   saveTreeFile(file, path);
-  EXPECT_THROW(loadTreeFile(path), SceneError);
+  EXPECT_THROW(loadTreeFile(path), Error);
   std::filesystem::remove(path);
 }
 

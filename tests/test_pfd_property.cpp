@@ -91,7 +91,7 @@ void checkScene(const std::string& spec, uint32_t eyes, uint32_t min_per_level, 
   Scene scene;
   try {
     scene = loadScene(spec);
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     GTEST_SKIP() << spec << ": " << e.what();  // freedoom2.wad not installed
   }
   ASSERT_FALSE(scene.levels.empty()) << spec;
@@ -145,7 +145,7 @@ TEST(PfdProperty, FreedoomMap01CornerOfNearlyParallelLines) {
   Scene scene;
   try {
     scene = loadScene("freedoom2.wad:MAP01");
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     GTEST_SKIP() << e.what();  // freedoom2.wad not installed
   }
   const BspTree bsp = buildBsp(scene);

@@ -104,12 +104,12 @@ TEST(AddFace, NonFiniteCoordinatesAreAnErrorNamingTheContext) {
   try {
     addFace(s, bad, 0, "model.obj:7");
     FAIL() << "no error";
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("model.obj:7"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("non-finite"), std::string::npos);
   }
   const glm::dvec3 inf[] = {{0, 0, 0}, {INFINITY, 0, 0}, {0, 1, 0}};
-  EXPECT_THROW(addFace(s, inf, 0, "t"), SceneError);
+  EXPECT_THROW(addFace(s, inf, 0, "t"), Error);
 }
 
 TEST(AddFace, RandomSimplePolygonsKeepTheirAreaWhenSplit) {
@@ -184,22 +184,22 @@ TEST(GeneratorParamsTest, RangesAndUnknownKeysAreErrorsNamingTheGenerator) {
   try {
     p.getInt("rooms", 4, 1, 100);
     FAIL();
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("gen:test: parameter rooms=-3 is out of range"), std::string::npos);
   }
-  EXPECT_THROW(p.getDouble("size", 1.0, 0.0, 10.0), SceneError);
-  EXPECT_THROW(p.checkAllUsed(), SceneError);
+  EXPECT_THROW(p.getDouble("size", 1.0, 0.0, 10.0), Error);
+  EXPECT_THROW(p.checkAllUsed(), Error);
   GeneratorParams q("gen:test", {{"seed", "12"}});
   EXPECT_EQ(q.seed(), 12u);
   EXPECT_NO_THROW(q.checkAllUsed());
 }
 
 TEST(LoadScene, UnknownFormatAndMissingFileAreErrors) {
-  EXPECT_THROW(loadScene("model.xyz"), SceneError);
+  EXPECT_THROW(loadScene("model.xyz"), Error);
   try {
     loadScene("/nonexistent/model.obj");
     FAIL();
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/model.obj"), std::string::npos);
   }
 }

@@ -146,17 +146,17 @@ TEST(Subdivision, CullingComputesFortyPercentFewerTriangles) {
 TEST(Subdivision, BadControlMeshes) {
   ControlMesh m = animatedBlob(0.0, 0);
   m.triangles.pop_back();  // a hole
-  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), SceneError);
+  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), Error);
   m = animatedBlob(0.0, 0);
   m.triangles[0][0] = 99;
-  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), SceneError);
+  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), Error);
   m = animatedBlob(0.0, 0);
   std::swap(m.triangles[0][0], m.triangles[0][1]);  // one flipped triangle
-  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), SceneError);
+  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), Error);
   m = animatedBlob(0.0, 0);
   m.positions[3].x = NAN;
-  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), SceneError);
-  EXPECT_THROW(subdivide(animatedBlob(0.0, 0), 7, glm::dvec3(5.0), true), SceneError);
+  EXPECT_THROW(subdivide(m, 1, glm::dvec3(5.0), true), Error);
+  EXPECT_THROW(subdivide(animatedBlob(0.0, 0), 7, glm::dvec3(5.0), true), Error);
 }
 
 }  // namespace

@@ -118,7 +118,7 @@ TEST(Validate, BspOrderHasNoOrderErrorsOnGeneratedScenes) {
     Scene scene;
     try {
       scene = loadScene(spec);
-    } catch (const SceneError& e) {
+    } catch (const Error& e) {
       ADD_FAILURE() << spec << ": " << e.what();
       continue;
     }

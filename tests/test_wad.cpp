@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "core/byte_io.h"
 #include "scenes/loaders.h"
 #include "scenes/scene.h"
 
@@ -144,7 +145,7 @@ std::vector<uint8_t> roomWad() {
 std::string loadError(const std::vector<uint8_t>& bytes, const std::string& map = "MAP01") {
   try {
     loadWadMapFromMemory(bytes, map, "test.wad");
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     return e.what();
   }
   return "(no error)";
@@ -400,12 +401,12 @@ TEST(Wad, MalformedInputGivesSceneErrors) {
   try {
     readFileBytes("/nonexistent/dir/none.wad");
     ADD_FAILURE() << "no error";
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/none.wad"), std::string::npos);
   }
-  EXPECT_THROW(loadWadMap("/nonexistent/none.wad", "MAP01"), SceneError);
-  EXPECT_THROW(loadWadMap("/tmp", "MAP01"), SceneError);
-  EXPECT_THROW(wadMapNames("/nonexistent/none.wad"), SceneError);
+  EXPECT_THROW(loadWadMap("/nonexistent/none.wad", "MAP01"), Error);
+  EXPECT_THROW(loadWadMap("/tmp", "MAP01"), Error);
+  EXPECT_THROW(wadMapNames("/nonexistent/none.wad"), Error);
 }
 
 TEST(Wad, LoadsFromFile) {
@@ -426,7 +427,7 @@ TEST(Wad, LoadsFromFile) {
   try {
     loadWadMap(path, "MAP01");
     ADD_FAILURE() << "no error";
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), path + ": truncated WAD header (0 bytes, need 12)");
   }
   std::filesystem::remove(path);
@@ -465,7 +466,7 @@ TEST(Wad, TruncatedAndCorruptedBytesNeverCrash) {
     std::vector<uint8_t> cut(good.begin(), good.begin() + n);
     EXPECT_NE(loadError(cut), "(no error)") << n;
   }
-  // Random byte changes over fixed seeds: a scene or a SceneError, nothing else.
+  // Random byte changes over fixed seeds: a scene or a Error, nothing else.
   size_t loaded = 0;
   for (uint32_t seed = 1; seed <= 300; ++seed) {
     std::mt19937 rng(seed);
@@ -474,7 +475,7 @@ TEST(Wad, TruncatedAndCorruptedBytesNeverCrash) {
     try {
       loadWadMapFromMemory(bytes, "MAP01", "test.wad");
       ++loaded;
-    } catch (const SceneError&) {
+    } catch (const Error&) {
     }
   }
   EXPECT_GT(loaded, 0u);
@@ -557,7 +558,7 @@ TEST(Wad, MissingMapNamesTheMapsThereAre) {
   try {
     loadWadMap(kFreedoom2, "MAP99");
     ADD_FAILURE() << "no error";
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), kFreedoom2 + ": has no map MAP99; it has MAP01..MAP32 (32 maps)");
   }
 }

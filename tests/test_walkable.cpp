@@ -212,7 +212,7 @@ TEST(Walkable, OptionsOutOfRangeAreSceneErrors) {
   const auto bad = [](auto set) {
     WalkableOptions w;
     set(w);
-    EXPECT_THROW(navmesh("gen:house", w), SceneError);
+    EXPECT_THROW(navmesh("gen:house", w), Error);
   };
   bad([](WalkableOptions& w) { w.max_slope_deg = 95.0; });
   bad([](WalkableOptions& w) { w.max_slope_deg = 0.0; });
@@ -225,7 +225,7 @@ TEST(Walkable, OptionsOutOfRangeAreSceneErrors) {
     WalkableOptions w;
     w.max_slope_deg = 95.0;
     navmesh("gen:house", w);
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("gen:house"), std::string::npos);
   }
 }

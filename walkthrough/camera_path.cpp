@@ -9,6 +9,8 @@
 #include <string_view>
 #include <system_error>
 
+#include "core/byte_io.h"
+
 namespace walkvis {
 
 glm::dvec3 viewDirection(double yaw, double pitch) {
@@ -33,13 +35,13 @@ std::string_view trim(std::string_view s) {
 
 CameraPath loadCameraPath(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path + ": cannot open camera path");
+  if (!in) throw Error(path + ": cannot open camera path");
   CameraPath out;
   std::string line;
   uint64_t line_no = 0;
   bool header_seen = false;
-  auto fail = [&](const std::string& what) -> SceneError {
-    return SceneError(path + ":" + std::to_string(line_no) + ": " + what);
+  auto fail = [&](const std::string& what) -> Error {
+    return Error(path + ":" + std::to_string(line_no) + ": " + what);
   };
   while (std::getline(in, line)) {
     ++line_no;
@@ -68,32 +70,22 @@ CameraPath loadCameraPath(const std::string& path) {
     if (!(std::abs(key.pitch) < std::numbers::pi / 2)) throw fail("|pitch| must be below pi/2");
     out.keys.push_back(key);
   }
-  if (in.bad()) throw SceneError(path + ": read error");
-  if (!header_seen) throw SceneError(path + ": empty file, expected the header \"" + std::string(kHeader) + "\"");
-  if (out.keys.empty()) throw SceneError(path + ": no camera keys");
+  if (in.bad()) throw Error(path + ": read error");
+  if (!header_seen) throw Error(path + ": empty file, expected the header \"" + std::string(kHeader) + "\"");
+  if (out.keys.empty()) throw Error(path + ": no camera keys");
   return out;
 }
 
 void saveCameraPath(const CameraPath& path, const std::string& file) {
-  const std::string tmp = file + ".tmp";
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw SceneError(file + ": cannot write camera path");
-    bool ok = std::fprintf(f, "%s\n", std::string(kHeader).c_str()) > 0;
-    // %.17g round-trips every double, so a saved path loads back bit for bit.
-    for (const CameraKey& k : path.keys)
-      ok = ok && std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k.time, k.eye.x, k.eye.y, k.eye.z,
-                              k.yaw, k.pitch) > 0;
-    ok = (std::fclose(f) == 0) && ok;
-    if (!ok) {
-      std::remove(tmp.c_str());
-      throw SceneError(file + ": cannot write camera path");
-    }
+  std::string text = std::string(kHeader) + "\n";
+  char line[192];  // six %.17g fields of at most 24 characters
+  // %.17g round-trips every double, so a saved path loads back bit for bit.
+  for (const CameraKey& k : path.keys) {
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k.time, k.eye.x, k.eye.y, k.eye.z, k.yaw,
+                  k.pitch);
+    text += line;
   }
-  if (std::rename(tmp.c_str(), file.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw SceneError(file + ": cannot rename the camera path into place");
-  }
+  writeFileAtomically(file, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), "camera path");
 }
 
 }  // namespace walkvis

@@ -30,11 +30,11 @@ struct CameraPath {
 // Unit view direction of a yaw and pitch.
 glm::dvec3 viewDirection(double yaw, double pitch);
 
-// CSV with the header line "time,x,y,z,yaw,pitch" and one key per line. SceneError naming the file
+// CSV with the header line "time,x,y,z,yaw,pitch" and one key per line. Error naming the file
 // and line for a missing file, a bad header, a non-number, a non-finite value, a time going back,
 // |pitch| >= pi/2, or no keys at all.
 CameraPath loadCameraPath(const std::string& path);
-// Written to a temporary file beside `path` and renamed; SceneError naming the path on failure.
+// Written to a temporary file beside `path` and renamed; Error naming the path on failure.
 void saveCameraPath(const CameraPath& path, const std::string& file);
 
 // `frames` keys, one per 1/fps s, walking at eye height through the walkable region of the scene

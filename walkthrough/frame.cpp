@@ -77,7 +77,7 @@ std::string_view orderModeName(OrderMode mode) {
 OrderMode parseOrderMode(std::string_view name) {
   for (OrderMode m : {OrderMode::kZBuffer, OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd})
     if (orderModeName(m) == name) return m;
-  throw SceneError("order mode '" + std::string(name) + "': expected zbuffer, bsp, pfd or hfd");
+  throw Error("order mode '" + std::string(name) + "': expected zbuffer, bsp, pfd or hfd");
 }
 
 std::optional<uint32_t> World::levelAt(const glm::dvec3& eye) const {

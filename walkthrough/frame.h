@@ -30,7 +30,7 @@ namespace walkvis {
 
 enum class OrderMode : uint8_t { kZBuffer, kBsp, kPfd, kHfd };
 std::string_view orderModeName(OrderMode mode);  // "zbuffer", "bsp", "pfd", "hfd"
-OrderMode parseOrderMode(std::string_view name);  // SceneError otherwise
+OrderMode parseOrderMode(std::string_view name);  // Error otherwise
 
 struct WorldOptions {
   LoadOptions load;              // for a scene spec
@@ -65,7 +65,7 @@ struct World {
   std::optional<uint32_t> levelAt(const glm::dvec3& eye) const;
 };
 
-// A scene spec (loadScene) or a tree file (detected by its magic). SceneError naming the file
+// A scene spec (loadScene) or a tree file (detected by its magic). Error naming the file
 // otherwise. `progress` may be empty.
 World openWorld(const std::string& source, const WorldOptions& options,
                 const std::function<void(const std::string&)>& progress = {});

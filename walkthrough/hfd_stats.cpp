@@ -82,7 +82,7 @@ HfdSummary summarise(std::span<const HfdEyeStats> eyes, uint64_t fragments) {
 HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
                          const std::function<void(const std::string&)>& progress) {
   if (options.views == 0 || options.res <= 0 || options.res > 8192)
-    throw SceneError("stats: --views must be > 0 and --res in [1, 8192]");
+    throw Error("stats: --views must be > 0 and --res in [1, 8192]");
   const auto t0 = std::chrono::steady_clock::now();
   const BspTree& bsp = file.bsp;
   const uint64_t n = bsp.fragments.size();

@@ -75,7 +75,7 @@ struct HfdStats {
 };
 
 // Eyes are drawn per level uniformly by area over its cells' regions (deterministic in
-// options.seed). `progress` (may be empty) gets a line now and then. Throws SceneError when
+// options.seed). `progress` (may be empty) gets a line now and then. Throws Error when
 // options are out of range.
 HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
                          const std::function<void(const std::string&)>& progress = {});

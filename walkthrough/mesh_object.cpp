@@ -44,7 +44,7 @@ bool front(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const 
 ObjectSet parseObjectSet(std::string_view name) {
   for (ObjectSet s : {ObjectSet::kAuto, ObjectSet::kNone, ObjectSet::kBlob})
     if (objectSetName(s) == name) return s;
-  throw SceneError("objects '" + std::string(name) + "': expected auto, none or blob");
+  throw Error("objects '" + std::string(name) + "': expected auto, none or blob");
 }
 
 std::string_view objectSetName(ObjectSet set) {
@@ -118,7 +118,7 @@ std::vector<MeshObject> makeObjects(ObjectSet set, const std::string& spec, cons
       o->first_id = first_id;
       objects.push_back(std::move(*o));
     } else if (set == ObjectSet::kBlob) {
-      throw SceneError(spec + ": no walkable level to place the blob in");
+      throw Error(spec + ": no walkable level to place the blob in");
     }
   }
   return objects;

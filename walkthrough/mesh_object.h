@@ -24,7 +24,7 @@ namespace walkvis {
 // Which objects a world gets: kAuto = the blob for the default scene (a gen:office spec), none
 // otherwise; kNone; kBlob = the blob in any scene with a walkable level.
 enum class ObjectSet : uint8_t { kAuto, kNone, kBlob };
-ObjectSet parseObjectSet(std::string_view name);  // "auto", "none", "blob"; SceneError otherwise
+ObjectSet parseObjectSet(std::string_view name);  // "auto", "none", "blob"; Error otherwise
 std::string_view objectSetName(ObjectSet set);
 
 struct MeshObject {

@@ -15,9 +15,9 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
-#include <stdexcept>
 #include <string>
 
+#include "core/embree_scene.h"
 #include "scenes/scene.h"
 
 namespace walkvis {
@@ -79,18 +79,13 @@ std::optional<double> exactPolygonHit(std::span<const glm::dvec3> verts, const P
 }
 
 struct RayCaster::Impl {
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
+  EmbreeScene embree;
   std::vector<glm::dvec3> vertices;
   std::vector<Polygon> polygons;
   std::vector<uint32_t> triangle_polygon;
   glm::dvec3 origin{0.0};  // Embree coordinates are relative to this (the bounds' centre)
   double extent = 0.0;     // the bounds' diagonal
 
-  ~Impl() {
-    if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
-  }
 
   void initRay(RTCRayHit& rh, const View& view, const glm::dvec3& dir, float tnear, float tfar) const {
     const glm::dvec3 o = view.eye - origin;
@@ -117,8 +112,6 @@ RayCaster::RayCaster(std::span<const glm::dvec3> vertices, std::span<const Polyg
   Impl& s = *impl_;
   s.vertices.assign(vertices.begin(), vertices.end());
   s.polygons.assign(polygons.begin(), polygons.end());
-  s.device = rtcNewDevice(nullptr);
-  if (!s.device) throw std::runtime_error("Embree: rtcNewDevice failed");
   if (!s.vertices.empty()) {
     glm::dvec3 lo = s.vertices[0], hi = s.vertices[0];
     for (const auto& v : s.vertices) {
@@ -128,15 +121,7 @@ RayCaster::RayCaster(std::span<const glm::dvec3> vertices, std::span<const Polyg
     s.origin = 0.5 * (lo + hi);
     s.extent = glm::length(hi - lo);
   }
-  std::vector<float> positions;
   std::vector<uint32_t> indices;
-  positions.reserve(s.vertices.size() * 3);
-  for (const auto& v : s.vertices) {
-    const glm::dvec3 p = v - s.origin;
-    positions.push_back(static_cast<float>(p.x));
-    positions.push_back(static_cast<float>(p.y));
-    positions.push_back(static_cast<float>(p.z));
-  }
   for (size_t k = 0; k < s.polygons.size(); ++k) {
     const Polygon& p = s.polygons[k];
     if (p.vertex_count < 3 || p.first_vertex > s.vertices.size() ||
@@ -149,30 +134,9 @@ RayCaster::RayCaster(std::span<const glm::dvec3> vertices, std::span<const Polyg
       s.triangle_polygon.push_back(static_cast<uint32_t>(k));
     }
   }
-  s.scene = rtcNewScene(s.device);
-  // Robust traversal: watertight triangle tests, so a ray through a shared edge is not lost.
-  rtcSetSceneFlags(s.scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_HIGH);
-  if (!s.triangle_polygon.empty()) {
-    RTCGeometry geom = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), s.vertices.size()));
-    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(uint32_t), s.triangle_polygon.size()));
-    if (!vb || !ib) {
-      rtcReleaseGeometry(geom);
-      throw std::runtime_error("Embree: buffer allocation failed (error " +
-                               std::to_string(rtcGetDeviceError(s.device)) + ")");
-    }
-    std::copy(positions.begin(), positions.end(), vb);
-    std::copy(indices.begin(), indices.end(), ib);
-    rtcSetGeometryIntersectFilterFunction(geom, filterFrontFacing);
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(s.scene, geom);
-    rtcReleaseGeometry(geom);
-  }
-  rtcCommitScene(s.scene);
-  if (rtcGetDeviceError(s.device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: scene build failed");
+  s.embree = EmbreeScene(
+      {.vertices = s.vertices, .origin = s.origin, .indices = indices, .intersect_filter = filterFrontFacing},
+      "ray caster");
 }
 
 RayCaster::RayCaster(RayCaster&&) noexcept = default;
@@ -234,7 +198,7 @@ void RayCaster::castNearest(const View& view, std::span<const uint8_t> front, st
         rh.hit.primID[k] = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
       }
-      rtcIntersect16(valid, s.scene, &ctx.context, &rh);
+      rtcIntersect16(valid, s.embree.scene(), &ctx.context, &rh);
       for (int k = 0; k < 16; ++k) {
         if (!valid[k] || rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
         RayHit& h = out[static_cast<size_t>(j0 + (k >> 2)) * size + i0 + (k & 3)];
@@ -272,14 +236,14 @@ std::vector<RayHit> RayCaster::exactHits(const View& view, std::span<const uint8
         if (auto t = exactHit(k)) limit = std::max(limit, *t);
     if (limit < 0.0) {
       s.initRay(rh, view, dir, static_cast<float>(view.near), static_cast<float>(view.far));
-      rtcIntersect1(s.scene, &ctx.context, &rh);
+      rtcIntersect1(s.embree.scene(), &ctx.context, &rh);
       limit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? static_cast<double>(rh.ray.tfar) : view.far;
     }
     const double slack = 1e-3 * limit + 1e-5 * s.extent;
     ctx.collect = &candidates;
     s.initRay(rh, view, dir, static_cast<float>(view.near * (1.0 - 1e-5)),
               static_cast<float>(std::min(limit + slack, view.far * (1.0 + 1e-5))));
-    rtcIntersect1(s.scene, &ctx.context, &rh);
+    rtcIntersect1(s.embree.scene(), &ctx.context, &rh);
   }
   for (uint32_t k : also_check)
     if (k < s.polygons.size()) candidates.push_back(k);

@@ -137,13 +137,13 @@ struct ValidationResult {
 // Runs the validation of `order` on the polygons (vertices, polygons) — the set the order indexes,
 // e.g. a BSP's fragments — using `scene` for eyes (levels, bounds, eye height) and face colours
 // (polygons' face_id, in the diff PNGs). Throws std::runtime_error when no GL renderer can be made,
-// SceneError for options out of range.
+// Error for options out of range.
 ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> vertices,
                                std::span<const Polygon> polygons, const OrderProvider& order,
                                const ValidationOptions& options);
 
 // Writes an 8-bit RGB PNG (rgb: width * height * 3 bytes, top row first) to a temporary file next to
-// `path`, then renames it into place. SceneError naming the path when it cannot be written.
+// `path`, then renames it into place. Error naming the path when it cannot be written.
 void writePngRgb(const std::string& path, int width, int height, std::span<const uint8_t> rgb);
 
 }  // namespace walkvis

@@ -24,7 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const walkvis::Scene scene =
         walkvis::loadAssimpFromMemory(std::span<const uint8_t>(data + 1, size - 1), kHints[data[0] % 8], "fuzz", options);
     walkvis::checkSceneInvariants(scene);
-  } catch (const walkvis::SceneError&) {
+  } catch (const walkvis::Error&) {
   }
   return 0;
 }

@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const walkvis::Scene scene =
         walkvis::loadGltfFromMemory(std::span<const uint8_t>(data, size), binary ? "fuzz.glb" : "fuzz.gltf", binary);
     walkvis::checkSceneInvariants(scene);
-  } catch (const walkvis::SceneError&) {
+  } catch (const walkvis::Error&) {
   }
   return 0;
 }

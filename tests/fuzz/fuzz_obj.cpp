@@ -11,7 +11,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const walkvis::Scene scene =
         walkvis::loadObjFromMemory(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.obj");
     walkvis::checkSceneInvariants(scene);
-  } catch (const walkvis::SceneError&) {
+  } catch (const walkvis::Error&) {
   }
   return 0;
 }

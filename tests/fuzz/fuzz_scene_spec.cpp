@@ -45,7 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     const walkvis::Scene scene = walkvis::loadScene(spec);
     walkvis::checkSceneInvariants(scene);
-  } catch (const walkvis::SceneError&) {
+  } catch (const walkvis::Error&) {
   }
   return 0;
 }

@@ -12,7 +12,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const walkvis::Scene scene =
         walkvis::loadWadMapFromMemory(std::span<const uint8_t>(data, size), "MAP01", "fuzz.wad");
     walkvis::checkSceneInvariants(scene);
-  } catch (const walkvis::SceneError&) {
+  } catch (const walkvis::Error&) {
   }
   return 0;
 }

@@ -219,7 +219,7 @@ nlohmann::ordered_json benchInput(const std::string& label, const BackfaceInput&
                                   const std::vector<BackfaceView>& views, const BackfaceBenchArgs& args, bool& ok,
                                   const Bounds* eye_box = nullptr) {
   const size_t n = input.polygons.size();
-  if (n == 0) throw SceneError(label + ": no polygons to cull");
+  if (n == 0) throw Error(label + ": no polygons to cull");
   const std::vector<BackfaceView> tour_views = tourOrder(views);
   uint64_t back_total = 0;
   for (const BackfaceView& v : views) {
@@ -360,7 +360,7 @@ struct ListRow {
 std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const BackfaceBenchArgs& args, bool& ok) {
   std::vector<nlohmann::ordered_json> out;
   const Scene scene = loadScene(spec);
-  if (scene.levels.empty()) throw SceneError(spec + ": no floor levels to build priority lists on");
+  if (scene.levels.empty()) throw Error(spec + ": no floor levels to build priority lists on");
   size_t level = 0;
   for (size_t l = 0; l < scene.levels.size(); ++l) {
     const double dy = std::abs(scene.levels[l].floor_y + scene.eye_height - scene.start_eye.y);
@@ -419,7 +419,7 @@ std::vector<nlohmann::ordered_json> benchLists(const std::string& spec, const Ba
     }
     eyes.push_back(std::move(eye));
   }
-  if (listed == 0) throw SceneError(spec + ": the priority lists of level " + std::to_string(level) + " are empty");
+  if (listed == 0) throw Error(spec + ": the priority lists of level " + std::to_string(level) + " are empty");
 
   nlohmann::ordered_json lists;
   lists["mesh"] = spec + " pfd lists (level " + std::to_string(level) + ")";

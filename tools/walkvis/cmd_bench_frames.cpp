@@ -84,9 +84,9 @@ int runFramesBench(const FramesBenchArgs& args) {
       o.build_pfd = false;
       worlds.push_back(std::make_unique<World>(openWorld(hfd_file, o, progress)));
       if (worlds.back()->trees.kind != TreeKind::kHfd || worlds.back()->trees.levels.empty())
-        throw SceneError(hfd_file + ": not an HFD tree file (make one with `walkvis build --tree hfd`)");
+        throw Error(hfd_file + ": not an HFD tree file (make one with `walkvis build --tree hfd`)");
       if (worlds.back()->trees.bsp.fragments.size() != main.trees.bsp.fragments.size())
-        throw SceneError(hfd_file + ": its BSP differs from the source's");
+        throw Error(hfd_file + ": its BSP differs from the source's");
       worlds.back()->objects = main.objects;  // the same objects whatever the tree file's spec
       runs.push_back({"hfd+" + std::string(listCullMethodName(m)), OrderMode::kHfd, worlds.back().get()});
     }

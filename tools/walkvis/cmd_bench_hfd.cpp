@@ -26,6 +26,8 @@
 
 #include "bsp/bsp.h"
 #include "commands.h"
+#include "core/rng.h"
+#include "core/sample.h"
 #include "pfd_hfd/pfd.h"
 #include "pfd_hfd/visibility.h"
 #include "walkthrough/hfd_stats.h"
@@ -38,40 +40,8 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-uint64_t splitmix(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
-double uniform01(uint64_t& s) { return static_cast<double>(splitmix(s) >> 11) * 0x1.0p-53; }
 
 // ---- bench rays ----
-
-// A random point of a convex polygon (fan triangle by area, then barycentric).
-template <typename V>
-V pointIn(std::span<const V> poly, uint64_t& rng, double (*area)(const V&, const V&, const V&)) {
-  double total = 0.0;
-  for (size_t k = 1; k + 1 < poly.size(); ++k) total += area(poly[0], poly[k], poly[k + 1]);
-  double pick = uniform01(rng) * total;
-  size_t k = 1;
-  for (; k + 2 < poly.size(); ++k) {
-    const double a = area(poly[0], poly[k], poly[k + 1]);
-    if (pick <= a) break;
-    pick -= a;
-  }
-  double a = uniform01(rng), b = uniform01(rng);
-  if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
-  return poly[0] + a * (poly[k] - poly[0]) + b * (poly[k + 1] - poly[0]);
-}
-double area2(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
-  return std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
-}
-double area3(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  const glm::dvec3 u = b - a, v = c - a;
-  return std::sqrt(std::pow(u.y * v.z - u.z * v.y, 2) + std::pow(u.z * v.x - u.x * v.z, 2) +
-                   std::pow(u.x * v.y - u.y * v.x, 2));
-}
 
 struct RayRate {
   double rays_per_second_1 = 0.0;
@@ -91,22 +61,22 @@ RayRate measureRays(const Scene& scene, const BspTree& bsp, const VisibilityScen
     for (const auto& p : level.walkable) {
       if (p.size() < 3) continue;
       double a = 0.0;
-      for (size_t k = 1; k + 1 < p.size(); ++k) a += area2(p[0], p[k], p[k + 1]);
+      for (size_t k = 1; k + 1 < p.size(); ++k) a += twiceTriangleArea(p[0], p[k], p[k + 1]);
       if (!(a > 0.0)) continue;
       pieces.push_back({p, level.floor_y + scene.eye_height, a});
       total += a;
     }
-  if (pieces.empty() || bsp.fragments.empty()) throw SceneError(scene.name + ": no walkable region or no polygons");
+  if (pieces.empty() || bsp.fragments.empty()) throw Error(scene.name + ": no walkable region or no polygons");
   std::vector<std::pair<glm::dvec3, glm::dvec3>> rays(count);
   uint64_t rng = 12345;
   for (auto& r : rays) {
     double pick = uniform01(rng) * total;
     size_t i = 0;
     while (i + 1 < pieces.size() && pick > pieces[i].area) pick -= pieces[i++].area;
-    const glm::dvec2 e = pointIn<glm::dvec2>(pieces[i].v, rng, area2);
-    const uint32_t f = static_cast<uint32_t>(splitmix(rng) % bsp.fragments.size());
+    const glm::dvec2 e = uniformPointInConvex<glm::dvec2>(pieces[i].v, rng);
+    const uint32_t f = static_cast<uint32_t>(splitmix64(rng) % bsp.fragments.size());
     const auto fv = bsp.fragmentVertices(f);
-    const glm::dvec3 p = fv.size() >= 3 ? pointIn<glm::dvec3>(fv, rng, area3) : fv[0];
+    const glm::dvec3 p = fv.size() >= 3 ? uniformPointInConvex<glm::dvec3>(fv, rng) : fv[0];
     r = {glm::dvec3(e.x, pieces[i].y, e.y), p};
   }
   RayRate out;
@@ -316,7 +286,7 @@ int runHfdBench(const HfdBenchArgs& args) {
         points.push_back(pt);
       }
   std::ofstream csv(args.csv);
-  if (!csv) throw SceneError(args.csv + ": cannot write");
+  if (!csv) throw Error(args.csv + ": cannot write");
   csv << "point,scene,region_samples,polygon_samples,refine_rays,proof_rays,threads,build_seconds,vis_tests,rays,"
          "rays_per_second,ray_rate_fraction_1thread,ray_rate_fraction_2threads,rejected,tree_bytes,listed_mean,visible_mean,missed_mean,missed_max,"
          "eyes_with_miss,pixel_error_ratio,pixel_error_ratio_max,rejection_ratio,overestimation,eyes,res\n";
@@ -341,7 +311,7 @@ int runHfdBench(const HfdBenchArgs& args) {
                 static_cast<unsigned long long>(p.bytes), p.stats.listed_mean, p.stats.pixel_error_ratio,
                 p.stats.missed_mean, 100.0 * p.stats.eyes_with_miss, p.stats.overestimation);
   }
-  if (!csv) throw SceneError(args.csv + ": write failed");
+  if (!csv) throw Error(args.csv + ": write failed");
   if (!args.png.empty() && !points.empty()) drawPlot(points, args.png);
   if (stopped) std::printf("(stopped after %.0f s: --max-seconds; later points skipped)\n", args.max_seconds);
   std::printf("wrote %s, %s\n", args.csv.c_str(), args.png.c_str());

@@ -52,16 +52,16 @@ uint64_t parseSize(const std::string& text, const std::string& option) {
   try {
     value = std::stod(text, &used);
   } catch (...) {
-    throw SceneError(option + ": '" + text + "' is not a size (e.g. 512M, 2G)");
+    throw Error(option + ": '" + text + "' is not a size (e.g. 512M, 2G)");
   }
   std::string suffix = text.substr(used);
   double mult = 1.0;
   if (suffix == "k" || suffix == "K" || suffix == "KiB") mult = 1024.0;
   else if (suffix == "m" || suffix == "M" || suffix == "MiB") mult = 1024.0 * 1024.0;
   else if (suffix == "g" || suffix == "G" || suffix == "GiB") mult = 1024.0 * 1024.0 * 1024.0;
-  else if (!suffix.empty() && suffix != "B") throw SceneError(option + ": unknown size suffix in '" + text + "'");
+  else if (!suffix.empty() && suffix != "B") throw Error(option + ": unknown size suffix in '" + text + "'");
   if (!(value >= 0.0) || !std::isfinite(value) || value * mult > 1e18)
-    throw SceneError(option + ": '" + text + "' is out of range");
+    throw Error(option + ": '" + text + "' is out of range");
   return static_cast<uint64_t>(value * mult);
 }
 
@@ -80,11 +80,11 @@ VisibilityOptions parseSamples(const std::string& text, VisibilityOptions option
       used = 0;
     }
     if (used == 0 || used != item.size() || x > 1000000)
-      throw SceneError("--samples: '" + text + "' is not R,P,REFINE (three counts up to 1000000)");
+      throw Error("--samples: '" + text + "' is not R,P,REFINE (three counts up to 1000000)");
     v.push_back(static_cast<uint32_t>(x));
   }
   if (v.size() != 3 || v[0] == 0 || v[1] == 0)
-    throw SceneError("--samples: '" + text + "' is not R,P,REFINE (R and P at least 1)");
+    throw Error("--samples: '" + text + "' is not R,P,REFINE (R and P at least 1)");
   options.region_samples = v[0];
   options.polygon_samples = v[1];
   options.refine_rays = v[2];
@@ -151,9 +151,9 @@ QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) 
 }
 
 int runBuild(const BuildArgs& args) {
-  if (args.tree != "pfd" && args.tree != "hfd") throw SceneError("--tree: expected pfd or hfd, got '" + args.tree + "'");
+  if (args.tree != "pfd" && args.tree != "hfd") throw Error("--tree: expected pfd or hfd, got '" + args.tree + "'");
   const bool hfd = args.tree == "hfd";
-  if (!hfd && !args.samples.empty()) throw SceneError("--samples: only for --tree hfd");
+  if (!hfd && !args.samples.empty()) throw Error("--samples: only for --tree hfd");
   VisibilityOptions vis_options;
   vis_options.seed = args.visibility_seed;
   vis_options = parseSamples(args.samples, vis_options);
@@ -165,7 +165,7 @@ int runBuild(const BuildArgs& args) {
   options.cell_memory = parseSize(args.cell_memory, "--cell-memory");
   if (args.heuristic == "balanced") options.tree.heuristic = PfdHeuristic::kBalanced;
   else if (args.heuristic == "traversal") options.tree.heuristic = PfdHeuristic::kTraversal;
-  else throw SceneError("--heuristic: expected balanced or traversal, got '" + args.heuristic + "'");
+  else throw Error("--heuristic: expected balanced or traversal, got '" + args.heuristic + "'");
   options.tree.dedup = !args.no_dedup;
   options.tree.object_boxes = !args.no_object_boxes;
   options.tree.share_min = args.share_min;
@@ -175,7 +175,7 @@ int runBuild(const BuildArgs& args) {
   options.tree.root_search_lines = args.root_search_lines;
   options.tree.root_search_work = args.root_search_work;
   options.object_extent = args.object_extent;
-  if (!(args.object_extent >= 0.0)) throw SceneError("--object-extent: expected a number >= 0");
+  if (!(args.object_extent >= 0.0)) throw Error("--object-extent: expected a number >= 0");
 
   auto progress = [](const std::string& line) {
     std::fprintf(stderr, "%s\n", line.c_str());
@@ -189,7 +189,7 @@ int runBuild(const BuildArgs& args) {
   only.erase(std::unique(only.begin(), only.end()), only.end());
   for (uint32_t l : only) {
     if (l >= scene.levels.size()) {
-      throw SceneError(scene.name + ": --levels names level " + std::to_string(l) + ", but the scene has " +
+      throw Error(scene.name + ": --levels names level " + std::to_string(l) + ", but the scene has " +
                        std::to_string(scene.levels.size()) + " (walkvis info lists them)");
     }
   }

@@ -88,7 +88,7 @@ class PlanImage {
 void writePlans(const Scene& scene, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw SceneError(dir + ": cannot create the plan directory");
+  if (ec) throw Error(dir + ": cannot create the plan directory");
   const Bounds b = sceneBounds(scene);
   for (size_t l = 0; l < scene.levels.size(); ++l) {
     const FloorLevel& level = scene.levels[l];

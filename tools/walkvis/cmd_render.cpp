@@ -27,12 +27,12 @@ struct RenderArgs {
   bool ids = false;
 };
 
-// The tree kind a mode needs; SceneError when the source cannot give it.
+// The tree kind a mode needs; Error when the source cannot give it.
 void checkModeSource(OrderMode mode, const World& world) {
   if (mode == OrderMode::kHfd && (world.trees.levels.empty() || world.trees.kind != TreeKind::kHfd))
-    throw SceneError(world.source + ": --mode hfd needs a tree file made by `walkvis build --tree hfd`");
+    throw Error(world.source + ": --mode hfd needs a tree file made by `walkvis build --tree hfd`");
   if (mode == OrderMode::kPfd && !world.trees.levels.empty() && world.trees.kind != TreeKind::kPfd)
-    throw SceneError(world.source + ": --mode pfd needs a PFD tree file or a scene (this file holds HFD trees)");
+    throw Error(world.source + ": --mode pfd needs a PFD tree file or a scene (this file holds HFD trees)");
 }
 
 int runRender(const RenderArgs& args) {
@@ -57,7 +57,7 @@ int runRender(const RenderArgs& args) {
 
   std::error_code ec;
   std::filesystem::create_directories(args.out, ec);
-  if (ec || !std::filesystem::is_directory(args.out)) throw SceneError(args.out + ": cannot create the output folder");
+  if (ec || !std::filesystem::is_directory(args.out)) throw Error(args.out + ": cannot create the output folder");
 
   std::string why;
   auto context = OsMesaContext::create(size.width, size.height, 24, &why);
@@ -69,7 +69,7 @@ int runRender(const RenderArgs& args) {
   const std::string csv_path = (std::filesystem::path(args.out) / "frames.csv").string();
   const std::string csv_tmp = csv_path + ".tmp";
   std::ofstream csv(csv_tmp);
-  if (!csv) throw SceneError(csv_path + ": cannot open for writing");
+  if (!csv) throw Error(csv_path + ": cannot open for writing");
   csv << "frame,time,x,y,z,yaw,pitch,frame_ms,order_ms,draw_ms,drawn,listed,tests,culled,used,level,object_ms,"
          "object_triangles,object_triangles_computed\n";
   FrameBuilder builder;
@@ -99,9 +99,9 @@ int runRender(const RenderArgs& args) {
       std::fprintf(stderr, "  frame %zu/%zu\n", k + 1, path.keys.size());
   }
   csv.close();
-  if (!csv) throw SceneError(csv_path + ": cannot write");
+  if (!csv) throw Error(csv_path + ": cannot write");
   std::filesystem::rename(csv_tmp, csv_path, ec);
-  if (ec) throw SceneError(csv_path + ": cannot write (" + ec.message() + ")");
+  if (ec) throw Error(csv_path + ": cannot write (" + ec.message() + ")");
   std::printf("%zu frames written to %s (frames.csv, frame_*.png)\n", path.keys.size(), args.out.c_str());
   return 0;
 }

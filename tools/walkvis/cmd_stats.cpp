@@ -72,13 +72,13 @@ int runStats(const StatsArgs& args) {
   });
   if (!args.csv.empty()) {
     std::ofstream csv(args.csv);
-    if (!csv) throw SceneError(args.csv + ": cannot write");
+    if (!csv) throw Error(args.csv + ": cannot write");
     csv << "level,x,y,z,listed,visible,missed,error_pixels,pixels,tests\n";
     csv.precision(17);
     for (const HfdEyeStats& e : stats.eyes)
       csv << e.level << ',' << e.eye.x << ',' << e.eye.y << ',' << e.eye.z << ',' << e.listed << ',' << e.visible
           << ',' << e.missed << ',' << e.error_pixels << ',' << e.pixels << ',' << e.tests << '\n';
-    if (!csv) throw SceneError(args.csv + ": write failed");
+    if (!csv) throw Error(args.csv + ": write failed");
   }
   if (args.json) {
     nlohmann::ordered_json j;

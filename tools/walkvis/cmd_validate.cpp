@@ -48,7 +48,7 @@ std::vector<int> parseBits(const std::string& text) {
   std::string item;
   while (std::getline(ss, item, ',')) {
     if (item == "16" || item == "24" || item == "32") bits.push_back(std::stoi(item));
-    else throw SceneError("validate: --zbits: '" + item + "' is not 16, 24 or 32");
+    else throw Error("validate: --zbits: '" + item + "' is not 16, 24 or 32");
   }
   return bits;
 }
@@ -251,22 +251,22 @@ int runValidate(const ValidateArgs& args) {
   if (tree_file) {
     file = loadTreeFile(args.scene.scene);
     if (args.scene.load.eye_height >= 0.0 && args.scene.load.eye_height != file->eye_height)
-      throw SceneError(args.scene.scene + ": the trees were built for eye height " + std::to_string(file->eye_height) +
+      throw Error(args.scene.scene + ": the trees were built for eye height " + std::to_string(file->eye_height) +
                        "; rebuild them for --eye-height " + std::to_string(args.scene.load.eye_height));
     if (args.order != "bsp" && args.order != treeKindName(file->kind))
-      throw SceneError(args.scene.scene + ": holds " + std::string(treeKindName(file->kind)) + " trees, not " + args.order +
+      throw Error(args.scene.scene + ": holds " + std::string(treeKindName(file->kind)) + " trees, not " + args.order +
                        " (walkvis build --tree " + args.order + ")");
     scene = sceneOfTreeFile(*file, args.scene.scene);
   } else {
     if (args.order != "bsp")
-      throw SceneError("validate: --order " + args.order + " needs a tree file (walkvis build SCENE -o FILE --tree " +
+      throw Error("validate: --order " + args.order + " needs a tree file (walkvis build SCENE -o FILE --tree " +
                        args.order + "), not the scene '" + args.scene.scene + "'");
-    if (args.compare_bsp > 0) throw SceneError("validate: --compare-bsp needs a tree file");
+    if (args.compare_bsp > 0) throw Error("validate: --compare-bsp needs a tree file");
     scene = loadScene(args.scene.scene, args.scene.loadOptions());
   }
   const double load_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (args.compare_bsp > 0) {
-    if (args.order == "bsp") throw SceneError("validate: --compare-bsp compares --order pfd or hfd with the BSP");
+    if (args.order == "bsp") throw Error("validate: --compare-bsp compares --order pfd or hfd with the BSP");
     return runCompare(args, *file, args.scene.scene);
   }
 

@@ -18,18 +18,18 @@ struct ImageSize {
   int width = 640, height = 480;
 };
 
-// "640x480" → {640, 480}; SceneError naming the option otherwise (each side in [8, 8192]).
+// "640x480" → {640, 480}; Error naming the option otherwise (each side in [8, 8192]).
 inline ImageSize parseImageSize(const std::string& text, const std::string& option) {
   ImageSize s;
   char x = 0;
   char rest = 0;
   if (std::sscanf(text.c_str(), "%d%c%d%c", &s.width, &x, &s.height, &rest) != 3 || (x != 'x' && x != 'X') ||
       s.width < 8 || s.height < 8 || s.width > 8192 || s.height > 8192)
-    throw SceneError(option + ": '" + text + "' is not an image size WxH with sides in [8, 8192]");
+    throw Error(option + ": '" + text + "' is not an image size WxH with sides in [8, 8192]");
   return s;
 }
 
-// The path's keys (loadCameraPath, SceneError naming the file) when a file is given, else the
+// The path's keys (loadCameraPath, Error naming the file) when a file is given, else the
 // automatic tour of `frames` keys; then at most `frames` keys are kept (0 = all of a path file).
 inline CameraPath framesPath(const World& world, const std::string& path_file, uint32_t frames) {
   CameraPath path;
@@ -39,7 +39,7 @@ inline CameraPath framesPath(const World& world, const std::string& path_file, u
   } else {
     path = automaticTour(world.scene, world.trees.bsp, frames);
     if (path.keys.empty() && frames > 0)
-      throw SceneError(world.source + ": no walkable region for an automatic tour (give --path)");
+      throw Error(world.source + ": no walkable region for an automatic tour (give --path)");
   }
   return path;
 }

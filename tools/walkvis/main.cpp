@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   }
   try {
     return runner ? runner() : 0;
-  } catch (const SceneError& e) {
+  } catch (const Error& e) {
     std::fprintf(stderr, "walkvis: %s\n", e.what());
     return kExitBadInput;
   } catch (const std::exception& e) {

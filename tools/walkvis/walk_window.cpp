@@ -161,12 +161,12 @@ int runWalk(const WalkArgs& args) {
   options.build_pfd = mode == OrderMode::kPfd;
   std::optional<CameraPath> path;
   if (!args.path.empty()) path = loadCameraPath(args.path);  // bad files fail before any window opens
-  if (args.quit_at_end && !path) throw SceneError("--quit-at-end needs --path");
+  if (args.quit_at_end && !path) throw Error("--quit-at-end needs --path");
   if (!args.screenshot_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(args.screenshot_dir, ec);
     if (ec || !std::filesystem::is_directory(args.screenshot_dir))
-      throw SceneError(args.screenshot_dir + ": cannot create the screenshot folder");
+      throw Error(args.screenshot_dir + ": cannot create the screenshot folder");
   }
   auto progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   World world = openWorld(args.source, options, progress);

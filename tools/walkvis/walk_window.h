@@ -29,7 +29,7 @@ struct WalkArgs {
 };
 
 // Opens the window and runs until it is closed (Esc twice, the close button, or the end of the
-// path with quit_at_end). Returns the exit status; throws SceneError for bad input and
+// path with quit_at_end). Returns the exit status; throws Error for bad input and
 // std::runtime_error when no window or GL 4.5 context can be had.
 int runWalk(const WalkArgs& args);
 

@@ -10,6 +10,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/sample.h"
+
 namespace walkvis {
 
 namespace {
@@ -179,29 +181,11 @@ std::optional<Walker::Floor> Walker::floorUnder(double x, double z, double max_f
   return best;
 }
 
-std::optional<std::pair<glm::dvec2, uint32_t>> Walker::randomWalkablePoint(std::mt19937_64& rng) const {
+std::optional<std::pair<glm::dvec2, uint32_t>> Walker::randomWalkablePoint(uint64_t& rng) const {
   if (level_pieces_ == 0 || !(piece_area_cumulative_.back() > 0.0)) return std::nullopt;
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double pick = unit(rng) * piece_area_cumulative_.back();
-  const size_t i = std::min<size_t>(
-      std::upper_bound(piece_area_cumulative_.begin(), piece_area_cumulative_.end(), pick) -
-          piece_area_cumulative_.begin(),
-      level_pieces_ - 1);
+  const size_t i = pickByWeight(piece_area_cumulative_, rng);
   const auto& ring = scene_.levels[pieces_[i].level].walkable[pieces_[i].index];
-  // A fan triangle by area, then a uniform point in it.
-  std::vector<double> cum;
-  double acc = 0.0;
-  for (size_t k = 1; k + 1 < ring.size(); ++k) {
-    const glm::dvec2 e1 = ring[k] - ring[0], e2 = ring[k + 1] - ring[0];
-    acc += std::abs(e1.x * e2.y - e1.y * e2.x);
-    cum.push_back(acc);
-  }
-  const double t = unit(rng) * acc;
-  const size_t k = std::min<size_t>(std::upper_bound(cum.begin(), cum.end(), t) - cum.begin(), cum.size() - 1) + 1;
-  double r1 = unit(rng), r2 = unit(rng);
-  if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
-  const glm::dvec2 p = ring[0] + r1 * (ring[k] - ring[0]) + r2 * (ring[k + 1] - ring[0]);
-  return std::make_pair(p, pieces_[i].level);
+  return std::make_pair(uniformPointInConvex<glm::dvec2>(ring, rng), pieces_[i].level);
 }
 
 bool Walker::wallBlocks(uint32_t f, const glm::dvec3& a, const glm::dvec3& b, double radius) const {

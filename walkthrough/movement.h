@@ -18,7 +18,6 @@
 
 #include <cstdint>
 #include <optional>
-#include <random>
 #include <vector>
 
 #include <glm/vec2.hpp>
@@ -81,7 +80,7 @@ class Walker {
   std::optional<Floor> floorUnder(double x, double z, double max_floor_y) const;
   // A uniformly random point of the walkable region (all levels, by area) and its level; nullopt
   // for a scene without walkable area.
-  std::optional<std::pair<glm::dvec2, uint32_t>> randomWalkablePoint(std::mt19937_64& rng) const;
+  std::optional<std::pair<glm::dvec2, uint32_t>> randomWalkablePoint(uint64_t& rng) const;  // rng: core/rng.h state
 
  private:
   struct Piece {

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
-#include <random>
 
 #include <glm/geometric.hpp>
 
@@ -58,7 +57,7 @@ CameraPath automaticTour(const Scene& scene, const BspTree& bsp, uint32_t frames
   CameraPath path;
   if (frames == 0 || scene.levels.empty() || !(fps > 0.0)) return path;
   const Walker walker(scene, bsp);
-  std::mt19937_64 rng(seed);
+  uint64_t rng = seed;  // core/rng.h state
   WalkState state = walker.place(scene.start_eye);
   if (state.level < 0) {
     // The start eye is not over a floor: begin at a random walkable point instead.

@@ -13,12 +13,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <random>
 #include <stdexcept>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "core/sample.h"
 #include "walkthrough/renderer.h"
 
 namespace walkvis {
@@ -27,30 +27,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-
-double triangleArea(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
-  return 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y));
-}
-
-// Uniform point in a convex ring: a fan triangle by area, then uniform barycentrics.
-glm::dvec2 samplePiece(const std::vector<glm::dvec2>& ring, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  double total = 0.0;
-  for (size_t k = 1; k + 1 < ring.size(); ++k) total += triangleArea(ring[0], ring[k], ring[k + 1]);
-  double pick = unit(rng) * total;
-  size_t tri = 1;
-  for (; tri + 2 < ring.size(); ++tri) {
-    const double a = triangleArea(ring[0], ring[tri], ring[tri + 1]);
-    if (pick < a) break;
-    pick -= a;
-  }
-  double u = unit(rng), v = unit(rng);
-  if (u + v > 1.0) {
-    u = 1.0 - u;
-    v = 1.0 - v;
-  }
-  return ring[0] + u * (ring[tri] - ring[0]) + v * (ring[tri + 1] - ring[0]);
-}
 
 uint32_t faceColorOf(const Scene& scene, const Polygon& p) {
   return p.face_id < scene.face_colors.size() ? scene.face_colors[p.face_id] : faceColor(p.face_id);
@@ -180,8 +156,9 @@ std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t se
                                       double min_clearance) {
   std::vector<ValidationEye> eyes;
   if (count <= 0) return eyes;
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // core/rng.h's generator, not std::*_distribution: the eyes, and so every figure, are the same
+  // with every standard library.
+  uint64_t rng = seed;
   const Bounds b = sceneBounds(scene);
   struct Piece {
     int level;
@@ -194,7 +171,7 @@ std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t se
       const double a = ring.size() >= 3 ? std::abs(signedArea(ring)) : 0.0;
       if (a > 0.0 && std::isfinite(a)) {
         pieces.push_back({static_cast<int>(l), &ring});
-        weights.push_back(a);
+        weights.push_back((weights.empty() ? 0.0 : weights.back()) + a);  // cumulative
       }
     }
   }
@@ -217,23 +194,23 @@ std::vector<ValidationEye> sampleEyes(const Scene& scene, int count, uint64_t se
     return false;
   };
   const int off_count = static_cast<int>(std::floor(count * std::clamp(off_plane_fraction, 0.0, 1.0)));
-  std::discrete_distribution<size_t> pick_piece(weights.begin(), weights.end());
   for (int k = 0; k < count; ++k) {
     ValidationEye eye;
     if (pieces.empty()) {
-      eye.position = b.lo + glm::dvec3(unit(rng), unit(rng), unit(rng)) * (b.hi - b.lo);
+      const double x = uniform01(rng), y = uniform01(rng), z = uniform01(rng);
+      eye.position = b.lo + glm::dvec3(x, y, z) * (b.hi - b.lo);
       eye.on_height_plane = false;
     } else {
       for (int attempt = 0; attempt < kClearanceAttempts; ++attempt) {
-        const Piece& piece = pieces[pick_piece(rng)];
-        const glm::dvec2 xz = samplePiece(*piece.ring, rng);
+        const Piece& piece = pieces[pickByWeight(weights, rng)];
+        const glm::dvec2 xz = uniformPointInConvex<glm::dvec2>(*piece.ring, rng);
         eye.level = piece.level;
         eye.position = {xz.x, scene.levels[piece.level].floor_y + scene.eye_height, xz.y};
         if (!tooClose(eye.position)) break;
       }
     }
     if (k >= count - off_count) {
-      eye.position.y = b.lo.y + unit(rng) * (b.hi.y - b.lo.y);
+      eye.position.y = b.lo.y + uniform01(rng) * (b.hi.y - b.lo.y);
       eye.on_height_plane = false;
       eye.level = -1;
     }
@@ -257,10 +234,10 @@ static bool writePngStream(FILE* f, png_structp png, png_infop info, int width, 
 
 void writePngRgb(const std::string& path, int width, int height, std::span<const uint8_t> rgb) {
   if (width <= 0 || height <= 0 || rgb.size() != static_cast<size_t>(width) * height * 3)
-    throw SceneError(path + ": bad image size for PNG");
+    throw Error(path + ": bad image size for PNG");
   const std::string tmp = path + ".tmp";
   FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw SceneError(path + ": cannot open for writing");
+  if (!f) throw Error(path + ": cannot open for writing");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   bool ok = png && info && writePngStream(f, png, info, width, height, rgb.data());
@@ -270,7 +247,7 @@ void writePngRgb(const std::string& path, int width, int height, std::span<const
   if (ok) std::filesystem::rename(tmp, path, ec);
   if (!ok || ec) {
     std::filesystem::remove(tmp, ec);
-    throw SceneError(path + ": cannot write PNG");
+    throw Error(path + ": cannot write PNG");
   }
 }
 
@@ -278,10 +255,10 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
                                std::span<const Polygon> polygons, const OrderProvider& order,
                                const ValidationOptions& options) {
   const auto t_start = Clock::now();
-  if (options.size < 8 || options.size > 4096) throw SceneError("validate: --size must be in [8, 4096]");
-  if (options.eyes < 1 || options.eyes > 1000000) throw SceneError("validate: --views must be in [1, 1000000]");
+  if (options.size < 8 || options.size > 4096) throw Error("validate: --size must be in [8, 4096]");
+  if (options.eyes < 1 || options.eyes > 1000000) throw Error("validate: --views must be in [1, 1000000]");
   for (int bits : options.zbits)
-    if (bits != 16 && bits != 24 && bits != 32) throw SceneError("validate: --zbits takes 16, 24 and 32");
+    if (bits != 16 && bits != 24 && bits != 32) throw Error("validate: --zbits takes 16, 24 and 32");
   ValidationResult result;
   const int size = options.size;
   const size_t pixels = static_cast<size_t>(size) * size;

@@ -3,11 +3,19 @@
 // (back faces skipped in the traversal), painter's PFD (trees of a PFD tree file, or built in memory
 // for a scene), and painter's HFD with each backface method (an HFD tree file: the source or --hfd).
 // Per mode: median frame time (order + draw + glFinish), median polygons drawn, speedup over the
-// z-buffer. Order check: on every --check-every'th frame the painter's ids image is compared with
+// z-buffer, and the fraction of the ideal it reaches. Two reference runs frame every mode's time:
+// the floor (the same frames with nothing drawn: clear, the eye-relative vertex upload, glFinish),
+// and the ideal (drawing exactly the fragments the z-buffer frame shows, in BSP order, with no
+// order cost: what a perfect visibility method would draw). ideal_fraction = ideal time / mode
+// time, so 1 means the mode is as fast as drawing only what is seen. Every mode, the floor and the
+// ideal run the whole tour once per round, rounds in rotated order, and the medians are over all
+// rounds; frame_ms_round_spread (the range of the rounds' medians over their median) tells how far
+// the noise reaches, to compare with the differences between modes. Order check: on every --check-every'th frame the painter's ids image is compared with
 // the z-buffer's (24-bit depth, GL culling on) pixel by pixel; both rasterise the same triangles from
 // the same float positions, so a differing pixel is an order error or a depth tie of the z-buffer
 // itself. The exact ray-cast comparison is `walkvis validate`.
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <memory>
 
@@ -28,6 +36,7 @@ struct FramesBenchArgs {
   uint32_t frames = 120;
   std::string size = "320x240";
   uint32_t check_every = 10;
+  uint32_t rounds = 3;
   std::string objects = "auto";
   bool json = false;
 };
@@ -39,10 +48,18 @@ double medianOf(std::vector<double> v) {
   return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
+enum class RunKind : uint8_t { kMode, kFloor, kIdeal };
+
 struct ModeRun {
   std::string name;
   OrderMode mode;
   const World* world;
+  RunKind kind = RunKind::kMode;
+};
+
+struct ModeSamples {
+  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, object_triangles, round_medians;
+  uint64_t bsp_fallbacks = 0;
 };
 
 int runFramesBench(const FramesBenchArgs& args) {
@@ -100,15 +117,73 @@ int runFramesBench(const FramesBenchArgs& args) {
   if (!drawer) throw std::runtime_error("offscreen GL: " + why);
   drawer->upload(main.trees.bsp, main.scene);
 
-  // The z-buffer truth for the checked frames, once.
+  // The z-buffer truth, once: the ids images of the checked frames, and per frame the ideal list
+  // (the BSP order kept to the fragments the z-buffer frame shows).
   FrameBuilder builder;
-  std::vector<uint32_t> draw;
-  std::vector<std::vector<uint32_t>> truth;
+  std::vector<uint32_t> draw, ids;
+  std::vector<std::vector<uint32_t>> truth, ideal(path.keys.size());
   const uint32_t every = std::max(args.check_every, 1u);
-  for (size_t k = 0; k < path.keys.size(); k += every) {
-    timedFrame(zbuffer_world, builder, *drawer, cameraAt(path.keys[k], size), OrderMode::kZBuffer, DrawStyle::kIds,
-               draw, path.keys[k].time);
-    drawer->readIds(size.width, size.height, truth.emplace_back());
+  std::vector<uint8_t> shown(main.trees.bsp.fragments.size());
+  for (size_t k = 0; k < path.keys.size(); ++k) {
+    const FreeCamera camera = cameraAt(path.keys[k], size);
+    timedFrame(zbuffer_world, builder, *drawer, camera, OrderMode::kZBuffer, DrawStyle::kIds, draw, path.keys[k].time);
+    drawer->readIds(size.width, size.height, ids);
+    std::fill(shown.begin(), shown.end(), uint8_t{0});
+    for (uint32_t id : ids)
+      if (id < shown.size()) shown[id] = 1;
+    builder.build(main, camera, OrderMode::kBsp, draw, path.keys[k].time);
+    for (uint32_t f : draw)
+      if (f < shown.size() && shown[f]) ideal[k].push_back(f);
+    if (k % every == 0) truth.push_back(ids);
+  }
+  runs.push_back({"floor", OrderMode::kBsp, &main, RunKind::kFloor});
+  runs.push_back({"ideal", OrderMode::kBsp, &main, RunKind::kIdeal});
+
+  // One frame of a run: a mode's own frame, the empty frame or the ideal list, timed the same way.
+  auto runFrame = [&](const ModeRun& run, size_t k, DrawStyle style) {
+    const FreeCamera camera = cameraAt(path.keys[k], size);
+    if (run.kind == RunKind::kMode) return timedFrame(*run.world, builder, *drawer, camera, run.mode, style, draw, path.keys[k].time);
+    FrameStats stats = builder.build(*run.world, camera, OrderMode::kBsp, draw, path.keys[k].time);  // the objects
+    stats.order_ms = stats.object_ms = 0.0;
+    stats.tests = stats.culled = 0;
+    const std::span<const uint32_t> list =
+        run.kind == RunKind::kIdeal ? std::span<const uint32_t>(ideal[k]) : std::span<const uint32_t>();
+    stats.listed = stats.drawn = static_cast<uint32_t>(list.size());
+    const bool objects = run.kind == RunKind::kIdeal && !run.world->objects.empty();
+    const DrawSettings settings = settingsFor(OrderMode::kBsp, style, objects);
+    const auto t0 = std::chrono::steady_clock::now();
+    drawer->draw(camera, list, settings);
+    if (objects) drawObjects(builder, *drawer, camera, settings);
+    drawer->finish();
+    stats.draw_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return stats;
+  };
+
+  const uint32_t rounds = std::max(args.rounds, 1u);
+  std::vector<ModeSamples> samples(runs.size());
+  for (uint32_t r = 0; r < rounds; ++r) {
+    for (size_t q = 0; q < runs.size(); ++q) {
+      const size_t i = (q + r) % runs.size();  // rotated, so no mode always follows the same one
+      ModeSamples& m = samples[i];
+      std::vector<double> round_ms;
+      for (size_t k = 0; k < path.keys.size(); ++k) {
+        const FrameStats st = runFrame(runs[i], k, DrawStyle::kShaded);
+        const double ms = st.order_ms + st.object_ms + st.draw_ms;
+        round_ms.push_back(ms);
+        m.frame_ms.push_back(ms);
+        m.object_triangles.push_back(st.object_triangles);
+        m.order_ms.push_back(st.order_ms);
+        m.draw_ms.push_back(st.draw_ms);
+        m.drawn.push_back(st.drawn);
+        m.listed.push_back(st.listed);
+        m.tests.push_back(st.tests);
+        m.culled.push_back(st.culled);
+        if (r == 0 && runs[i].kind == RunKind::kMode && runs[i].mode != OrderMode::kZBuffer && st.used != runs[i].mode)
+          ++m.bsp_fallbacks;
+      }
+      m.round_medians.push_back(medianOf(round_ms));
+    }
+    progress("round " + std::to_string(r + 1) + "/" + std::to_string(rounds) + " done");
   }
 
   nlohmann::ordered_json out;
@@ -120,66 +195,65 @@ int runFramesBench(const FramesBenchArgs& args) {
   out["scene_polygons"] = main.trees.bsp.fragments.size();
   out["objects"] = main.objects.size();
   out["checked_frames"] = truth.size();
+  out["rounds"] = rounds;
+  const double zbuffer_ms = medianOf(samples[0].frame_ms);  // runs[0] is the z-buffer
+  const double floor_ms = medianOf(samples[runs.size() - 2].frame_ms);
+  const double ideal_ms = medianOf(samples[runs.size() - 1].frame_ms);
+  out["floor_ms_median"] = floor_ms;
+  out["ideal_ms_median"] = ideal_ms;
+  out["ideal_drawn_median"] = medianOf(samples[runs.size() - 1].drawn);
+  out["ideal_speedup"] = ideal_ms > 0.0 ? zbuffer_ms / ideal_ms : 0.0;
   auto rows = nlohmann::ordered_json::array();
-  double zbuffer_ms = 0.0;
   if (!args.json)
-    std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %9s %11s\n", "mode", "frame_ms", "order_ms", "draw_ms", "drawn",
-                "listed", "tests", "culled", "speedup", "diff_pixels");
-  std::vector<uint32_t> ids;
-  for (const ModeRun& run : runs) {
-    std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, object_triangles;
-    uint64_t bsp_fallbacks = 0;
-    for (const CameraKey& key : path.keys) {
-      const FrameStats s =
-          timedFrame(*run.world, builder, *drawer, cameraAt(key, size), run.mode, DrawStyle::kShaded, draw, key.time);
-      frame_ms.push_back(s.order_ms + s.object_ms + s.draw_ms);
-      object_triangles.push_back(s.object_triangles);
-      order_ms.push_back(s.order_ms);
-      draw_ms.push_back(s.draw_ms);
-      drawn.push_back(s.drawn);
-      listed.push_back(s.listed);
-      tests.push_back(s.tests);
-      culled.push_back(s.culled);
-      if (run.mode != OrderMode::kZBuffer && s.used != run.mode) ++bsp_fallbacks;
-    }
+    std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %9s %7s %7s %11s\n", "mode", "frame_ms", "order_ms", "draw_ms",
+                "drawn", "listed", "tests", "culled", "speedup", "ideal", "spread", "diff_pixels");
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const ModeRun& run = runs[i];
+    const ModeSamples& m = samples[i];
     uint64_t diff_pixels = 0;
-    if (run.mode != OrderMode::kZBuffer) {
+    if (run.kind != RunKind::kFloor && run.mode != OrderMode::kZBuffer) {
       size_t t = 0;
       for (size_t k = 0; k < path.keys.size(); k += every, ++t) {
-        timedFrame(*run.world, builder, *drawer, cameraAt(path.keys[k], size), run.mode, DrawStyle::kIds, draw,
-                   path.keys[k].time);
+        runFrame(run, k, DrawStyle::kIds);
         drawer->readIds(size.width, size.height, ids);
         for (size_t p = 0; p < ids.size(); ++p) diff_pixels += ids[p] != truth[t][p];
       }
     }
-    const double med = medianOf(frame_ms);
-    if (run.mode == OrderMode::kZBuffer) zbuffer_ms = med;
+    const double med = medianOf(m.frame_ms);
     const double speedup = med > 0.0 ? zbuffer_ms / med : 0.0;
+    const double ideal_fraction = med > 0.0 ? ideal_ms / med : 0.0;
+    const auto [lo, hi] = std::minmax_element(m.round_medians.begin(), m.round_medians.end());
+    const double spread = med > 0.0 ? (*hi - *lo) / med : 0.0;
     rows.push_back({{"mode", run.name},
                     {"frame_ms_median", med},
-                    {"order_ms_median", medianOf(order_ms)},
-                    {"draw_ms_median", medianOf(draw_ms)},
-                    {"drawn_median", medianOf(drawn)},
-                    {"listed_median", medianOf(listed)},
-                    {"tests_median", medianOf(tests)},
-                    {"culled_median", medianOf(culled)},
-                    {"object_triangles_median", medianOf(object_triangles)},
+                    {"frame_ms_round_spread", spread},
+                    {"order_ms_median", medianOf(m.order_ms)},
+                    {"draw_ms_median", medianOf(m.draw_ms)},
+                    {"drawn_median", medianOf(m.drawn)},
+                    {"listed_median", medianOf(m.listed)},
+                    {"tests_median", medianOf(m.tests)},
+                    {"culled_median", medianOf(m.culled)},
+                    {"object_triangles_median", medianOf(m.object_triangles)},
                     {"speedup_vs_zbuffer", speedup},
-                    {"bsp_fallback_frames", bsp_fallbacks},
+                    {"ideal_fraction", ideal_fraction},
+                    {"bsp_fallback_frames", m.bsp_fallbacks},
                     {"pixels_differing_from_zbuffer", diff_pixels}});
     if (!args.json)
-      std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %9.2f %11llu\n", run.name.c_str(), med,
-                  medianOf(order_ms), medianOf(draw_ms), medianOf(drawn), medianOf(listed), medianOf(tests),
-                  medianOf(culled), speedup, static_cast<unsigned long long>(diff_pixels));
+      std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %9.2f %6.0f%% %6.1f%% %11llu\n", run.name.c_str(),
+                  med, medianOf(m.order_ms), medianOf(m.draw_ms), medianOf(m.drawn), medianOf(m.listed),
+                  medianOf(m.tests), medianOf(m.culled), speedup, 100.0 * ideal_fraction, 100.0 * spread,
+                  static_cast<unsigned long long>(diff_pixels));
   }
   out["modes"] = rows;
   if (args.json) {
     std::printf("%s\n", out.dump(2).c_str());
   } else {
-    std::printf("%zu frames %dx%d of %s, %zu fragments, %zu mesh objects; diff_pixels: ids differing from the "
-                "24-bit z-buffer on %zu checked frames (%zu pixels each)\n",
+    std::printf("%zu frames %dx%d of %s, %zu fragments, %zu mesh objects, %u rounds; floor %.3f ms, ideal %.3f ms "
+                "(%.2fx the z-buffer); ideal: ideal time over the mode's; spread: range of the rounds' medians; "
+                "diff_pixels: ids differing from the 24-bit z-buffer on %zu checked frames (%zu pixels each)\n",
                 path.keys.size(), size.width, size.height, args.source.c_str(), main.trees.bsp.fragments.size(),
-                main.objects.size(), truth.size(), static_cast<size_t>(size.width) * size.height);
+                main.objects.size(), rounds, floor_ms, ideal_ms, ideal_ms > 0.0 ? zbuffer_ms / ideal_ms : 0.0,
+                truth.size(), static_cast<size_t>(size.width) * size.height);
   }
   return 0;
 }
@@ -198,6 +272,8 @@ void addBenchFrames(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--size", args->size, "Image size WxH");
   sub->add_option("--check-every", args->check_every, "Compare ids with the z-buffer on every k-th frame")
       ->check(CLI::Range(1u, 100000u));
+  sub->add_option("--rounds", args->rounds, "Times every mode runs the whole tour (medians over all rounds)")
+      ->check(CLI::Range(1u, 1000u));
   sub->add_option("--objects", args->objects,
                   "Mesh objects: auto (the animated blob in gen:office) | none | blob (in the start room)");
   sub->add_flag("--json", args->json, "Print JSON");

@@ -20,24 +20,32 @@
 namespace walkvis {
 namespace {
 
+// Bytes as parseSize reads them back: "1G", "64M", "512k" for whole binary multiples, else digits.
+std::string formatSize(uint64_t bytes) {
+  for (const auto& [shift, suffix] : {std::pair{30, "G"}, {20, "M"}, {10, "k"}})
+    if (bytes != 0 && bytes % (1ull << shift) == 0) return std::to_string(bytes >> shift) + suffix;
+  return std::to_string(bytes);
+}
+
+// Defaults come from the options structs, so each knob is declared once.
 struct BuildArgs {
   SceneArgs scene;
   std::string output;
   std::string tree = "pfd";
-  std::string max_memory = "1G";
-  std::string cell_memory = "64M";
+  std::string max_memory = formatSize(PfdLevelOptions{}.max_memory);
+  std::string cell_memory = formatSize(PfdLevelOptions{}.cell_memory);
   std::string heuristic = "balanced";
   double object_extent = PfdLevelOptions{}.object_extent;
   std::string samples;  // hfd: R,P,REFINE
   std::vector<uint32_t> levels;  // only these level indices; empty: all
-  uint64_t visibility_seed = 1;
+  uint64_t visibility_seed = VisibilityOptions{}.seed;
   bool keep_back_faces = false;
   bool no_fuse_occluders = false;
   std::string visibility_mode = "sampled";
   bool no_dedup = false;
   bool no_object_boxes = false;
   uint32_t share_min = PfdOptions{}.share_min;
-  uint32_t stat_eyes = 10000;
+  uint32_t stat_eyes = PfdOptions{}.stat_eyes;
   uint32_t search_lines = PfdOptions{}.search_lines;
   uint64_t search_work = PfdOptions{}.search_work;
   uint32_t root_search_lines = PfdOptions{}.root_search_lines;
@@ -403,9 +411,11 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
                   "Build only these levels (indices as walkvis info lists them, comma-separated; default: all); "
                   "elsewhere the walkthrough uses the BSP order")
       ->delimiter(',');
-  sub->add_option("--max-memory", args->max_memory, "Budget for all trees together (e.g. 512M, 2G; default 1G)");
+  sub->add_option("--max-memory", args->max_memory,
+                  "Budget for all trees together (e.g. 512M, 2G; default " + args->max_memory + ")");
   sub->add_option("--cell-memory", args->cell_memory,
-                  "A tree over this many bytes is cut into four view cells (default 64M; 0: never). PFD levels are planned into cells by an estimate first; an HFD level starts as one cell");
+                  "A tree over this many bytes is cut into four view cells (default " + args->cell_memory +
+                      "; 0: never). PFD levels are planned into cells by an estimate first; an HFD level starts as one cell");
   sub->add_option("--heuristic", args->heuristic, "Which undecided test-line first: balanced or traversal");
   sub->add_option("--object-extent", args->object_extent,
                   "Detail objects: BSP subtrees whose fragments fit in a box of this many eye heights are listed "
@@ -417,7 +427,8 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("--share-min", args->share_min,
                   "Orders of at least this many ids are stored as sequences of their sub-orders (less memory, more "
                   "runs per query); 4294967295: flat runs only");
-  sub->add_option("--stat-eyes", args->stat_eyes, "Random eyes per tree for tests_mean / tests_max");
+  sub->add_option("--stat-eyes", args->stat_eyes,
+                  "Random eyes per tree for tests_mean / tests_max (default " + std::to_string(args->stat_eyes) + ")");
   sub->add_option("--search-lines", args->search_lines,
                   "pfd: optimal choice of the next tests where at most this many lines remain (0: off, also at "
                   "the root)")

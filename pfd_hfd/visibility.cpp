@@ -360,6 +360,7 @@ struct VisibilityScene::Impl {
   };
   bool visibleTarget(const Target& shape, std::span<const std::vector<glm::dvec2>> region, double height,
                      VisibilityCounters& counters, glm::dvec2* witness) const;
+  class Query;  // one visibleTarget call's steps
 
   glm::vec3 rel(const glm::dvec3& p) const { return glm::vec3(p - origin); }
 
@@ -760,521 +761,595 @@ bool VisibilityScene::boxVisibleFromRegion(const glm::dvec3& lo, const glm::dvec
   return false;
 }
 
+// One test of a target from a region (Impl::visibleTarget) as named steps over its shared state:
+// the samples' seed, the region's pieces and the target's plane; then a first packet of uniform
+// rays, the proof, the rest of the uniform rays, and the refinement past blockers' edges. The
+// steps run in that order and each draws from the one random stream in the order written, so the
+// answer is a function of the scene, the options, the target's key, the region and the height.
+class VisibilityScene::Impl::Query {
+ public:
+  Query(const Impl& scene, const Target& shape, std::span<const std::vector<glm::dvec2>> region, double height,
+        VisibilityCounters& counters)
+      : s_(scene),
+        opt_(scene.options),
+        shape_(shape),
+        region_(region),
+        height_(height),
+        counters_(counters),
+        sc_(scratch()),
+        region_inset_(kRegionInset * scene.extent),
+        end_gap_(kEndGap * scene.extent),
+        min_gap_(kMinGap * scene.extent) {}
+
+  bool run(glm::dvec2* witness);
+
+ private:
+  // Set-up.
+  uint64_t seed() const;
+  void preparePieces();
+  void prepareTarget();
+  // Geometry of one ray.
+  glm::dvec3 eyeAt(const glm::dvec2& p) const { return glm::dvec3(p.x, height_, p.y); }
+  glm::dvec3 target3(const glm::dvec2& q) const { return tbase_ + q.x * tu_ + q.y * tw_; }
+  double eyeSide(const glm::dvec3& e) const { return glm::dot(shape_.plane.n, e) - shape_.plane.d; }
+  double rayEnd(const glm::dvec3& e, const glm::dvec3& p) const;
+  int castClear(const glm::dvec3& e, const glm::dvec3& p, Hit* hit, double tnear = 0.0);
+  // 0. The proof.
+  bool covers(uint32_t o, std::span<const glm::dvec2> rp, std::span<const glm::dvec2> tq) const;
+  bool proofItems(uint32_t max_items);
+  glm::dvec2 centroidOf(uint32_t first, uint32_t count) const;
+  bool halve(uint32_t first, uint32_t count, uint32_t out[4]);
+  int proveHidden();
+  // 1. Uniform samples.
+  void sampleEyes();
+  void sampleTargets();
+  bool uniformPackets(uint64_t packets);
+  // 2. Refinement.
+  bool stepRay(const StepParent& pa, uint32_t k, uint32_t variant, glm::dvec3& e_out, glm::dvec3& p_out) const;
+  bool refine(glm::dvec2* witness);
+  bool visibleWith(glm::dvec2* witness, const glm::dvec3& eye) {
+    ++counters_.visible;
+    if (witness) *witness = {eye.x, eye.z};
+    return true;
+  }
+
+  const Impl& s_;
+  const VisibilityOptions& opt_;
+  const Target& shape_;
+  std::span<const std::vector<glm::dvec2>> region_;
+  const double height_;
+  VisibilityCounters& counters_;
+  Scratch& sc_;
+  const double region_inset_, end_gap_, min_gap_;
+  uint64_t rng_ = 0;
+  // The target's plane basis: tbase_ + q.x tu_ + q.y tw_ for a point q of sc_.target2.
+  glm::dvec3 tu_{0.0}, tw_{0.0}, tbase_{0.0};
+  glm::dvec2 tc_{0.0};        // the target's centroid in that basis
+  glm::dvec3 clear_eye_{0.0};  // the eye of the unblocked ray that answers "visible" (the witness)
+  // The uniform pairs (eyes × targets) and the next one to cast.
+  uint32_t ne_ = 0, nt_ = 0;
+  uint64_t pairs_ = 0, next_pair_ = 0;
+};
+
 bool VisibilityScene::Impl::visibleTarget(const Target& shape, std::span<const std::vector<glm::dvec2>> region,
                                           double height, VisibilityCounters& counters, glm::dvec2* witness) const {
-  const Impl& s = *this;
-  const VisibilityOptions& opt = s.options;
   ++counters.tests;
   if (shape.vertices.size() < 3) return false;
-  Scratch& sc = scratch();
-  const double region_inset = kRegionInset * s.extent;
-  const double end_gap = kEndGap * s.extent;
-  const double min_gap = kMinGap * s.extent;
+  return Query(*this, shape, region, height, counters).run(witness);
+}
 
-  // Seed: the options' seed, the target's key, the region's vertices and the height.
-  uint64_t h = mixHash(opt.seed, shape.key);
-  {
-    uint64_t bits;
-    std::memcpy(&bits, &height, 8);
-    h = mixHash(h, bits);
-    for (const auto& piece : region)
-      for (const auto& v : piece) {
-        std::memcpy(&bits, &v.x, 8);
-        h = mixHash(h, bits);
-        std::memcpy(&bits, &v.y, 8);
-        h = mixHash(h, bits);
-      }
-  }
-  uint64_t rng = h;
-
-  // Region pieces, counter-clockwise, zero-area ones dropped: made again only when the region
-  // differs from the last query's on this thread.
-  bool same_region = sc.region_sizes.size() == region.size();
-  for (size_t i = 0, at = 0; same_region && i < region.size(); at += region[i].size(), ++i)
-    same_region = sc.region_sizes[i] == region[i].size() && at + region[i].size() <= sc.region_flat.size() &&
-                  std::equal(region[i].begin(), region[i].end(), sc.region_flat.begin() + static_cast<std::ptrdiff_t>(at));
-  if (!same_region) {
-    sc.region_sizes.clear();
-    sc.region_flat.clear();
-    for (const auto& piece : region) {
-      sc.region_sizes.push_back(static_cast<uint32_t>(piece.size()));
-      sc.region_flat.insert(sc.region_flat.end(), piece.begin(), piece.end());
-    }
-    buildPieces(region, sc);
-  }
-  const double region_area = sc.region_area, perimeter = sc.perimeter;
-  if (sc.pieces.empty()) return false;
-  auto eyeAt = [&](const glm::dvec2& p) { return glm::dvec3(p.x, height, p.y); };
-
-  // Target in its plane basis, pulled in from its edges.
-  const Plane& tp = shape.plane;
-  glm::dvec3 tu, tw;
-  planeBasis(tp.n, tu, tw);
-  const glm::dvec3 tbase = tp.n * tp.d;
-  sc.target2.clear();
-  glm::dvec2 tc{0.0};
-  for (const glm::dvec3& corner : shape.vertices) {
-    const glm::dvec3 v = corner - tbase;
-    sc.target2.push_back({glm::dot(v, tu), glm::dot(v, tw)});
-    tc += sc.target2.back();
-  }
-  tc /= static_cast<double>(sc.target2.size());
-  for (auto& v : sc.target2) v = pullTowards(v, tc, kTargetShrink, end_gap);
-  Convex2& target_c = sc.target_c;
-  target_c.v = sc.target2;
-  target_c.centroid = tc;
-  auto target3 = [&](const glm::dvec2& q) { return tbase + q.x * tu + q.y * tw; };
-
-  // Eye side: only eyes in the target's front half-space, at least 2 end gaps from its plane, can
-  // see it (nearer ones see it edge-on, and the ray would end before it starts).
-  auto eyeSide = [&](const glm::dvec3& e) { return glm::dot(tp.n, e) - tp.d; };
-  // Where the ray from e to p ends (a parameter along p - e), or -1 when it is not cast.
-  auto rayEnd = [&](const glm::dvec3& e, const glm::dvec3& p) -> double {
-    const double side = eyeSide(e);
-    if (!(side > min_gap)) return -1.0;  // not a ray: the front side is not seen (or only edge-on)
-    // The ray's last stretch, within `gap` of the target's plane, is not cast. Its shadow on the
-    // plane runs from p towards the eye's foot for gap * (in-plane length / side); it must stay
-    // inside the target, or a blocker standing on the target's edge (a wall meeting it at a
-    // corner) could be skipped by a grazing ray. So the gap shrinks for grazing rays, down to
-    // min_gap; below that the target is seen too nearly edge-on to cast a ray to p.
-    const glm::dvec3 to_eye = e - p;
-    const glm::dvec2 w2{glm::dot(to_eye, tu), glm::dot(to_eye, tw)};
-    const double in_plane = glm::length(w2);
-    double gap = std::min(end_gap, 0.5 * side);
-    if (in_plane > 0.0) {
-      const glm::dvec3 pq = p - tbase;
-      const glm::dvec2 q{glm::dot(pq, tu), glm::dot(pq, tw)};
-      const glm::dvec2 u2 = w2 / in_plane;
-      double exit = std::numeric_limits<double>::infinity();
-      const size_t n = sc.target2.size();
-      for (size_t i = 0; i < n; ++i) {
-        const glm::dvec2 a = sc.target2[i], ab = sc.target2[(i + 1) % n] - a;
-        const double rate = cross2(ab, u2);
-        if (rate < 0.0) exit = std::min(exit, std::max(0.0, cross2(ab, q - a)) / -rate);
-      }
-      gap = std::min(gap, 0.5 * exit * side / in_plane);
-    }
-    if (!(gap >= min_gap)) return -1.0;
-    return 1.0 - gap / side;
-  };
-  // Casts one ray; 1 when unblocked, 0 blocked, -1 not cast. `tnear` skips blockers met before it.
-  auto castClear = [&](const glm::dvec3& e, const glm::dvec3& p, Hit* hit, double tnear = 0.0) -> int {
-    const double tfar = rayEnd(e, p);
-    if (!(tfar > tnear)) return -1;
-    ++counters.rays;
-    return s.blocked(e, p, tfar, hit, tnear) ? 0 : 1;
-  };
-
-  glm::dvec3 clear_eye{0.0};  // the eye of the unblocked ray that answers "visible" (the witness)
-
-  // ---- 0. proof by one occluder (a blocker, or a patch of them) per sub-cone (exact, used after
-  // the first packet) ----
-  // The segments from a convex region piece R (at the height) to a convex part T of the inset
-  // target fill conv(R ∪ T); where R lies strictly in front of a blocker's plane and T strictly
-  // behind, they cross that plane inside conv of the crossings of the vertex-to-vertex segments.
-  // So when those crossings all lie inside the blocker's outline (by a margin), every sampled ray
-  // would be blocked by its front side: the fragment is hidden from R with no further rays. The
-  // candidate blockers are those met by a ray from R's centroid to T's centroid, alone or grown
-  // into a patch (Impl::patchCovers); where none covers, the larger of R and T is halved and each
-  // half proved alone, within a ray budget.
-  // Returns 1 proved hidden, 2 a ray was unblocked (visible), 0 neither.
-  auto covers = [&](uint32_t o, std::span<const glm::dvec2> rp, std::span<const glm::dvec2> tq) -> bool {
-    const Plane& op = s.outline_plane[o];
-    if (s.outline_first[o + 1] - s.outline_first[o] < 3) return false;
-    // The margin: the minimum gap, 16 times the single-precision rounding of Embree's
-    // coordinates, so that a crossing proved inside is inside the float triangles too (and below
-    // the region's shrink, so that a room's own wall can cover eyes near it).
-    const double margin = min_gap;
-    for (const auto& r : rp)
-      if (!(glm::dot(op.n, eyeAt(r)) - op.d > margin)) return false;
-    for (const auto& t : tq)
-      if (!(glm::dot(op.n, target3(t)) - op.d < -margin)) return false;
-    for (const auto& r : rp) {
-      const glm::dvec3 r3 = eyeAt(r);
-      const double dr = glm::dot(op.n, r3) - op.d;
-      for (const auto& t : tq) {
-        const glm::dvec3 t3 = target3(t);
-        const double dt = glm::dot(op.n, t3) - op.d;
-        if (!(s.clearance(o, r3 + (dr / (dr - dt)) * (t3 - r3)) >= margin)) return false;
-      }
-    }
-    return true;
-  };
-  auto proveHidden = [&]() -> int {
-    sc.pool.clear();
-    sc.items.clear();
-    const uint32_t t_first = 0, t_count = static_cast<uint32_t>(sc.target2.size());
-    sc.pool.insert(sc.pool.end(), sc.target2.begin(), sc.target2.end());
-    // Only the part of each piece in front of the target (by the minimum gap) casts rays.
-    const glm::dvec2 g{tp.n.x, tp.n.z};
-    const double c0 = tp.n.y * height - tp.d - min_gap;
-    // Each item costs at least one ray of the budget, so with more items than rays the proof
-    // cannot finish: stop before shrinking the rest (a region of a whole level has thousands of
-    // pieces, and shrinking them was most of a test's time there).
-    const uint32_t max_items = opt.conservative ? std::max(opt.proof_rays, opt.conservative_proof_rays) : opt.proof_rays;
-    for (const auto& piece : sc.pieces) {
-      if (sc.items.size() > max_items) return 0;
-      if (circleBehind(piece, g, c0) || !clipHalfPlane(piece.v, g, c0, sc.clip)) continue;
-      // Shrunk by four times the eye margin of the covers (a patch's separating plane keeps the
-      // margin on both sides, so twice it from the eyes): region edges usually lie on walls, and an
-      // eye on a wall's plane (or at a room's corner) crosses it nowhere inside its outline. No
-      // more than that: HFD regions can be a few samples' insets wide, and eyes of the band given
-      // up here see what the proof would hide (a band of half the inset, as this once was, made
-      // freedoom2 MAP01's pixel error 30 times larger with the proof run before any ray). A piece
-      // too thin to shrink is not proved at all.
-      bool empty = false;
-      sc.poly = sc.clip;
-      for (size_t k = 0; k < sc.poly.size() && !empty; ++k) {
-        const glm::dvec2 a = sc.poly[k], ab = sc.poly[(k + 1) % sc.poly.size()] - a;
-        const double len = glm::length(ab);
-        if (!(len > 0.0)) continue;
-        const glm::dvec2 inward = glm::dvec2(-ab.y, ab.x) / len;
-        if (!clipHalfPlane(sc.clip, inward, -glm::dot(inward, a) - 4.0 * min_gap, sc.poly2)) empty = true;
-        else sc.clip.swap(sc.poly2);
-      }
-      if (empty) return 0;
-      const uint32_t first = static_cast<uint32_t>(sc.pool.size());
-      sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
-      sc.items.push_back({first, static_cast<uint32_t>(sc.clip.size()), t_first, t_count, 0});
-    }
-    uint32_t budget = max_items;
-    auto centroidOf = [&](uint32_t first, uint32_t count) {
-      glm::dvec2 c{0.0};
-      for (uint32_t k = 0; k < count; ++k) c += sc.pool[first + k];
-      return c / static_cast<double>(count);
-    };
-    // Halves the polygon pool[first, +count) across its longest vertex-to-vertex direction; the
-    // halves are appended to the pool. False when it cannot be split.
-    auto halve = [&](uint32_t first, uint32_t count, uint32_t out[4]) -> bool {
-      glm::dvec2 axis{0.0};
-      double best = 0.0;
-      for (uint32_t a = 0; a < count; ++a)
-        for (uint32_t b = a + 1; b < count; ++b) {
-          const glm::dvec2 d = sc.pool[first + b] - sc.pool[first + a];
-          if (glm::dot(d, d) > best) best = glm::dot(d, d), axis = d;
-        }
-      if (!(best > 0.0)) return false;
-      const glm::dvec2 c = centroidOf(first, count);
-      sc.poly.assign(sc.pool.begin() + first, sc.pool.begin() + first + count);
-      for (int side = 0; side < 2; ++side) {
-        const glm::dvec2 gs = side == 0 ? axis : -axis;
-        if (!clipHalfPlane(sc.poly, gs, -glm::dot(gs, c), sc.clip)) return false;
-        out[2 * side] = static_cast<uint32_t>(sc.pool.size());
-        out[2 * side + 1] = static_cast<uint32_t>(sc.clip.size());
-        sc.pool.insert(sc.pool.end(), sc.clip.begin(), sc.clip.end());
-      }
-      return true;
-    };
-    while (!sc.items.empty()) {
-      const ProofItem it = sc.items.back();
-      sc.items.pop_back();
-      const std::span<const glm::dvec2> rp(sc.pool.data() + it.region_first, it.region_count);
-      const std::span<const glm::dvec2> tq(sc.pool.data() + it.target_first, it.target_count);
-      const glm::dvec3 e = eyeAt(centroidOf(it.region_first, it.region_count));
-      const glm::dvec3 p = target3(centroidOf(it.target_first, it.target_count));
-      bool covered = false;
-      double tnear = 0.0;
-      uint32_t last_outline = UINT32_MAX;
-      bool parts3 = false;
-      for (uint32_t hits = 0; hits < kProofHits && budget > 0 && !covered; ++hits) {
-        Hit hit;
-        const int r = castClear(e, p, &hit, tnear);
-        if (r < 0) return 0;
-        --budget;
-        if (r == 1 && hits == 0) clear_eye = e;
-        if (r == 1) return hits == 0 ? 2 : 0;  // past the first blocker: not a sampled ray
-        const uint32_t o = s.fragment_outline[hit.fragment];
-        // The next blocker along the same ray: a relative step past this hit, 1e-6 of the ray,
-        // far above float rounding of t and far below any wall's thickness along it.
-        tnear = hit.t + 1e-6;
-        if (o == last_outline) continue;
-        last_outline = o;
-        covered = covers(o, rp, tq);
-        if (!covered && opt.fuse_occluders) {
-          if (!parts3) {  // the item's parts in 3D, once for all the blockers tried
-            sc.region3.clear();
-            sc.target3.clear();
-            for (const auto& rv : rp) sc.region3.push_back(eyeAt(rv));
-            for (const auto& t : tq) sc.target3.push_back(target3(t));
-            parts3 = true;
-          }
-          covered = s.patchCovers(o, shape.outline, sc.region3, sc.target3, min_gap, end_gap, min_gap, sc);
-          if (covered) ++counters.patch_covers;
-        }
-      }
-      if (covered) continue;
-      if (it.depth >= kMaxProofDepth || budget == 0) return 0;
-      // Halve whichever of R and T is larger, in scene units.
-      const bool split_region = diameter2(rp) >= diameter2(tq);
-      uint32_t halves[4];
-      if (!halve(split_region ? it.region_first : it.target_first, split_region ? it.region_count : it.target_count,
-                 halves))
-        return 0;
-      for (int k = 1; k >= 0; --k) {
-        ProofItem child = it;
-        child.depth = it.depth + 1;
-        if (split_region) child.region_first = halves[2 * k], child.region_count = halves[2 * k + 1];
-        else child.target_first = halves[2 * k], child.target_count = halves[2 * k + 1];
-        sc.items.push_back(child);
-      }
-    }
-    return 1;
-  };
-
-  // ---- 1. uniform samples ----
-  const uint32_t R = std::max<uint32_t>(1, opt.region_samples);
-  const uint32_t P = std::max<uint32_t>(1, opt.polygon_samples);
-  sc.eyes.clear();
-  {
-    // Corners: a quarter of the samples (all corners when fewer), then a quarter along the edges,
-    // the rest inside by area.
-    size_t corners = 0;
-    for (const auto& p : sc.pieces) corners += p.v.size();
-    const uint32_t n_corner = static_cast<uint32_t>(std::min<size_t>(corners, std::max<uint32_t>(1, R / 4)));
-    const uint32_t n_edge = std::min<uint32_t>(R - std::min(R, n_corner), std::max<uint32_t>(1, R / 4));
-    const uint32_t n_near = opt.near_samples ? std::min<uint32_t>(R - std::min(R, n_corner + n_edge), R / 4) : 0;
-    const uint32_t n_area = R - std::min(R, n_corner + n_edge + n_near);
-    const double stride = static_cast<double>(corners) / n_corner;
-    const double offset = uniform01(rng);
-    for (uint32_t k = 0; k < n_corner; ++k) {
-      size_t idx = static_cast<size_t>((k + offset) * stride) % corners;
-      for (const auto& p : sc.pieces) {
-        if (idx < p.v.size()) {
-          sc.eyes.push_back(eyeAt(pullTowards(p.v[idx], p.centroid, 0.0, region_inset)));
-          break;
-        }
-        idx -= p.v.size();
-      }
-    }
-    // Along the perimeter (stratified, one random offset).
-    const double off = uniform01(rng);
-    for (uint32_t k = 0; k < n_edge; ++k) {
-      double at = (k + off) / n_edge * perimeter;
-      bool done = false;
-      for (const auto& p : sc.pieces) {
-        for (size_t i = 0; i < p.v.size() && !done; ++i) {
-          const glm::dvec2 a = p.v[i], b = p.v[(i + 1) % p.v.size()];
-          const double len = glm::length(b - a);
-          if (at <= len || (&p == &sc.pieces.back() && i + 1 == p.v.size())) {
-            const glm::dvec2 q = len > 0.0 ? a + std::min(at / len, 1.0) * (b - a) : a;
-            sc.eyes.push_back(eyeAt(pullTowards(q, p.centroid, 0.0, region_inset)));
-            done = true;
-          }
-          at -= len;
-        }
-        if (done) break;
-      }
-    }
-    // In front of the target: the region's nearest point to a point of the target moved out along
-    // its normal, at stratified distances up to the target's diameter. A wall of one room of a
-    // large region is seen from that room only, which area samples hit rarely (docs/DESIGN.md,
-    // "Sizes and errors": room grids); these eyes stand in it, facing the wall from a useful distance.
-    if (n_near > 0) {
-      const double diameter = std::sqrt(diameter2(sc.target2));
-      for (uint32_t k = 0; k < n_near; ++k) {
-        const glm::dvec2 q = k == 0 ? tc : pointInConvex(target_c, uniform01(rng), uniform01(rng), sc.tri_cum);
-        const glm::dvec3 in_front = target3(q) + tp.n * (diameter * (k + uniform01(rng)) / n_near);
-        const std::optional<glm::dvec2> eye2 =
-            nearestInPieces(sc.pieces, {in_front.x, in_front.z}, region_inset, nullptr, 0.0, sc.clip, sc.grid);
-        sc.eyes.push_back(eyeAt(eye2.value_or(glm::dvec2(0.0))));
-      }
-    }
-    // Inside: stratified over the area (1D strata over the pieces' cumulative area, jittered).
-    sc.piece_cum.clear();
-    double acc = 0.0;
-    for (const auto& p : sc.pieces) sc.piece_cum.push_back(acc += p.area);
-    for (uint32_t k = 0; k < n_area; ++k) {
-      const double at = (k + uniform01(rng)) / n_area * region_area;
-      size_t pi = std::lower_bound(sc.piece_cum.begin(), sc.piece_cum.end(), at) - sc.piece_cum.begin();
-      if (pi >= sc.pieces.size()) pi = sc.pieces.size() - 1;
-      const glm::dvec2 q = pointInConvex(sc.pieces[pi], uniform01(rng), uniform01(rng), sc.tri_cum);
-      sc.eyes.push_back(eyeAt(pullTowards(q, sc.pieces[pi].centroid, 0.0, region_inset)));
-    }
-  }
-  sc.targets.clear();
-  {
-    const uint32_t n_corner = std::min<uint32_t>(static_cast<uint32_t>(sc.target2.size()), P / 2);
-    for (uint32_t k = 0; k < n_corner; ++k) sc.targets.push_back(target3(sc.target2[k * sc.target2.size() / n_corner]));
-    const uint32_t n_area = P - n_corner;
-    for (uint32_t k = 0; k < n_area; ++k) {
-      // Stratified in the first coordinate, which picks the fan triangle and one barycentric.
-      const double u = (k + uniform01(rng)) / n_area;
-      sc.targets.push_back(target3(pointInConvex(target_c, u, uniform01(rng), sc.tri_cum)));
-    }
-  }
-  const uint32_t ne = static_cast<uint32_t>(sc.eyes.size()), nt = static_cast<uint32_t>(sc.targets.size());
-  // Diagonal order: block b pairs eye i with target (b + i) mod nt, so every pair comes once and
-  // the first block already uses every eye. Rays go in packets of Impl::kPacket (the answer does
-  // not depend on the packet size: any unblocked ray keeps the fragment).
-  const uint64_t pairs = static_cast<uint64_t>(ne) * nt;
-  uint64_t next_pair = 0;
-  // Casts packets until `packets` were cast or the pairs run out; true when a ray was unblocked.
-  auto uniformPackets = [&](uint64_t packets) -> bool {
-    glm::dvec3 pe[Impl::kPacket], pt[Impl::kPacket];
-    double pf[Impl::kPacket];
-    for (uint64_t cast = 0; cast < packets && next_pair < pairs; ++cast) {
-      int n = 0;
-      for (; next_pair < pairs && n < Impl::kPacket; ++next_pair) {
-        const uint32_t i = static_cast<uint32_t>(next_pair % ne);
-        const uint32_t j = static_cast<uint32_t>((next_pair / ne + i) % nt);
-        const double tfar = rayEnd(sc.eyes[i], sc.targets[j]);
-        if (!(tfar > 0.0)) continue;
-        pe[n] = sc.eyes[i], pt[n] = sc.targets[j], pf[n] = tfar;
-        ++n;
-      }
-      if (n == 0) break;
-      counters.rays += static_cast<uint64_t>(n);
-      const int clear = s.firstClear16(pe, pt, pf, n);
-      if (clear >= 0) {
-        clear_eye = pe[clear];
-        return true;
-      }
-    }
-    return false;
-  };
-  if (uniformPackets(1)) {
-    ++counters.visible;
-    if (witness) *witness = {clear_eye.x, clear_eye.z};
-    return true;
-  }
-  if (opt.proof_rays > 0 || opt.conservative) {
-    const uint64_t rays_before = counters.rays;
+bool VisibilityScene::Impl::Query::run(glm::dvec2* witness) {
+  rng_ = seed();
+  preparePieces();
+  if (sc_.pieces.empty()) return false;
+  prepareTarget();
+  sampleEyes();
+  sampleTargets();
+  if (uniformPackets(1)) return visibleWith(witness, clear_eye_);
+  if (opt_.proof_rays > 0 || opt_.conservative) {
+    const uint64_t rays_before = counters_.rays;
     const int proof = proveHidden();
-    counters.proof_rays += counters.rays - rays_before;
-    if (proof == 2) {
-      ++counters.visible;
-      if (witness) *witness = {clear_eye.x, clear_eye.z};
-      return true;
-    }
+    counters_.proof_rays += counters_.rays - rays_before;
+    if (proof == 2) return visibleWith(witness, clear_eye_);
     if (proof == 1) {
-      ++counters.proved_hidden;
+      ++counters_.proved_hidden;
       return false;
     }
   }
-  if (opt.conservative) {
+  if (opt_.conservative) {
     // Not proved hidden: kept, whatever further sampling would say.
-    ++counters.visible;
-    ++counters.kept_unproven;
+    ++counters_.visible;
+    ++counters_.kept_unproven;
     if (witness) *witness = glm::dvec2(std::numeric_limits<double>::quiet_NaN());
     return true;
   }
-  if (uniformPackets(std::numeric_limits<uint64_t>::max())) {
-    ++counters.visible;
-    if (witness) *witness = {clear_eye.x, clear_eye.z};
-    return true;
-  }
+  if (uniformPackets(std::numeric_limits<uint64_t>::max())) return visibleWith(witness, clear_eye_);
+  return refine(witness);
+}
 
-  // ---- 2. refinement: step past the edges of the nearest blockers ----
-  if (opt.refine_rays == 0) return false;
-  sc.queue.clear();
-  {
-    // Seeds: eyes in sample order (corners and edges first) each against a target point, spread
-    // over the uniform pairs.
-    const uint32_t seeds = std::max<uint32_t>(1, std::min<uint32_t>(opt.refine_rays / 16, ne * nt));
-    for (uint32_t k = 0; k < seeds; ++k) {
-      const uint32_t i = k % ne;
-      const uint32_t j = static_cast<uint32_t>((k / ne + k * 7 + 3) % nt);
-      Probe seed;
-      seed.eye = sc.eyes[i], seed.target = sc.targets[j];
-      sc.queue.push_back(seed);
+// The options' seed, the target's key, the region's vertices and the height.
+uint64_t VisibilityScene::Impl::Query::seed() const {
+  uint64_t h = mixHash(opt_.seed, shape_.key);
+  uint64_t bits;
+  std::memcpy(&bits, &height_, 8);
+  h = mixHash(h, bits);
+  for (const auto& piece : region_)
+    for (const auto& v : piece) {
+      std::memcpy(&bits, &v.x, 8);
+      h = mixHash(h, bits);
+      std::memcpy(&bits, &v.y, 8);
+      h = mixHash(h, bits);
+    }
+  return h;
+}
+
+// Region pieces, counter-clockwise, zero-area ones dropped: made again only when the region
+// differs from the last query's on this thread.
+void VisibilityScene::Impl::Query::preparePieces() {
+  bool same_region = sc_.region_sizes.size() == region_.size();
+  for (size_t i = 0, at = 0; same_region && i < region_.size(); at += region_[i].size(), ++i)
+    same_region = sc_.region_sizes[i] == region_[i].size() && at + region_[i].size() <= sc_.region_flat.size() &&
+                  std::equal(region_[i].begin(), region_[i].end(),
+                             sc_.region_flat.begin() + static_cast<std::ptrdiff_t>(at));
+  if (same_region) return;
+  sc_.region_sizes.clear();
+  sc_.region_flat.clear();
+  for (const auto& piece : region_) {
+    sc_.region_sizes.push_back(static_cast<uint32_t>(piece.size()));
+    sc_.region_flat.insert(sc_.region_flat.end(), piece.begin(), piece.end());
+  }
+  buildPieces(region_, sc_);
+}
+
+// The target in its plane basis, pulled in from its edges.
+void VisibilityScene::Impl::Query::prepareTarget() {
+  const Plane& tp = shape_.plane;
+  planeBasis(tp.n, tu_, tw_);
+  tbase_ = tp.n * tp.d;
+  sc_.target2.clear();
+  tc_ = glm::dvec2(0.0);
+  for (const glm::dvec3& corner : shape_.vertices) {
+    const glm::dvec3 v = corner - tbase_;
+    sc_.target2.push_back({glm::dot(v, tu_), glm::dot(v, tw_)});
+    tc_ += sc_.target2.back();
+  }
+  tc_ /= static_cast<double>(sc_.target2.size());
+  for (auto& v : sc_.target2) v = pullTowards(v, tc_, kTargetShrink, end_gap_);
+  sc_.target_c.v = sc_.target2;
+  sc_.target_c.centroid = tc_;
+}
+
+// Where the ray from e to p ends (a parameter along p - e), or -1 when it is not cast. Only eyes
+// in the target's front half-space, at least 2 end gaps from its plane, can see it (nearer ones
+// see it edge-on, and the ray would end before it starts).
+double VisibilityScene::Impl::Query::rayEnd(const glm::dvec3& e, const glm::dvec3& p) const {
+  const double side = eyeSide(e);
+  if (!(side > min_gap_)) return -1.0;  // not a ray: the front side is not seen (or only edge-on)
+  // The ray's last stretch, within `gap` of the target's plane, is not cast. Its shadow on the
+  // plane runs from p towards the eye's foot for gap * (in-plane length / side); it must stay
+  // inside the target, or a blocker standing on the target's edge (a wall meeting it at a
+  // corner) could be skipped by a grazing ray. So the gap shrinks for grazing rays, down to
+  // min_gap; below that the target is seen too nearly edge-on to cast a ray to p.
+  const glm::dvec3 to_eye = e - p;
+  const glm::dvec2 w2{glm::dot(to_eye, tu_), glm::dot(to_eye, tw_)};
+  const double in_plane = glm::length(w2);
+  double gap = std::min(end_gap_, 0.5 * side);
+  if (in_plane > 0.0) {
+    const glm::dvec3 pq = p - tbase_;
+    const glm::dvec2 q{glm::dot(pq, tu_), glm::dot(pq, tw_)};
+    const glm::dvec2 u2 = w2 / in_plane;
+    double exit = std::numeric_limits<double>::infinity();
+    const size_t n = sc_.target2.size();
+    for (size_t i = 0; i < n; ++i) {
+      const glm::dvec2 a = sc_.target2[i], ab = sc_.target2[(i + 1) % n] - a;
+      const double rate = cross2(ab, u2);
+      if (rate < 0.0) exit = std::min(exit, std::max(0.0, cross2(ab, q - a)) / -rate);
+    }
+    gap = std::min(gap, 0.5 * exit * side / in_plane);
+  }
+  if (!(gap >= min_gap_)) return -1.0;
+  return 1.0 - gap / side;
+}
+
+// Casts one ray; 1 when unblocked, 0 blocked, -1 not cast. `tnear` skips blockers met before it.
+int VisibilityScene::Impl::Query::castClear(const glm::dvec3& e, const glm::dvec3& p, Hit* hit, double tnear) {
+  const double tfar = rayEnd(e, p);
+  if (!(tfar > tnear)) return -1;
+  ++counters_.rays;
+  return s_.blocked(e, p, tfar, hit, tnear) ? 0 : 1;
+}
+
+// ---- 0. Proof by one occluder (a blocker, or a patch of them) per sub-cone (exact, used after
+// the first packet) ----
+// The segments from a convex region piece R (at the height) to a convex part T of the inset
+// target fill conv(R ∪ T); where R lies strictly in front of a blocker's plane and T strictly
+// behind, they cross that plane inside conv of the crossings of the vertex-to-vertex segments.
+// So when those crossings all lie inside the blocker's outline (by a margin), every sampled ray
+// would be blocked by its front side: the fragment is hidden from R with no further rays. The
+// candidate blockers are those met by a ray from R's centroid to T's centroid, alone or grown
+// into a patch (Impl::patchCovers); where none covers, the larger of R and T is halved and each
+// half proved alone, within a ray budget.
+bool VisibilityScene::Impl::Query::covers(uint32_t o, std::span<const glm::dvec2> rp,
+                                          std::span<const glm::dvec2> tq) const {
+  const Plane& op = s_.outline_plane[o];
+  if (s_.outline_first[o + 1] - s_.outline_first[o] < 3) return false;
+  // The margin: the minimum gap, 16 times the single-precision rounding of Embree's
+  // coordinates, so that a crossing proved inside is inside the float triangles too (and below
+  // the region's shrink, so that a room's own wall can cover eyes near it).
+  const double margin = min_gap_;
+  for (const auto& r : rp)
+    if (!(glm::dot(op.n, eyeAt(r)) - op.d > margin)) return false;
+  for (const auto& t : tq)
+    if (!(glm::dot(op.n, target3(t)) - op.d < -margin)) return false;
+  for (const auto& r : rp) {
+    const glm::dvec3 r3 = eyeAt(r);
+    const double dr = glm::dot(op.n, r3) - op.d;
+    for (const auto& t : tq) {
+      const glm::dvec3 t3 = target3(t);
+      const double dt = glm::dot(op.n, t3) - op.d;
+      if (!(s_.clearance(o, r3 + (dr / (dr - dt)) * (t3 - r3)) >= margin)) return false;
     }
   }
-  size_t head = 0;
-  sc.parents.clear();
-  // A step's ray is worked out only when it comes off the queue (most never do: the budget runs
-  // out first); the order of the queue is the same as if each were worked out when pushed, and a
-  // step that yields no ray is dropped then, as it would have been.
-  auto stepRay = [&](const StepParent& pa, uint32_t k, uint32_t variant, glm::dvec3& e_out,
-                     glm::dvec3& p_out) -> bool {
-    const uint32_t of = s.outline_first[pa.outline], oc = s.outline_first[pa.outline + 1] - of;
-    const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
-    const glm::dvec3 edge = b - a;
-    const double el = glm::length(edge);
-    if (!(el > 0.0)) return false;
-    const glm::dvec3 dir = pa.target - pa.eye;
-    const double margin = std::max(end_gap, kStepMargin * pa.hit_t * glm::length(dir));
-    // Outline counter-clockwise seen from the blocker's front: outside is to the edge's right.
-    const glm::dvec3 out = glm::normalize(glm::cross(edge, pa.blocker_normal));
-    const glm::dvec3 xp = closestOnSegment(a, b, pa.x) + margin * out;
-    if (variant == 0) {
-      // (a) Keep the eye, move the target point: the eye and the edge span a plane; target
-      // points on xp's side of it (by the margin scaled to the target's distance) are seen past
-      // the edge. The nearest such point of the inset target to the current one.
-      const glm::dvec3 m3 = glm::cross(edge, a - pa.eye);
-      const double ml = glm::length(m3);
-      if (!(ml > 0.0)) return false;
-      const glm::dvec3 mn = m3 / ml;
-      const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
-      const double offset = margin * glm::length(dir) / std::max(pa.hit_t * glm::length(dir), end_gap);
-      const glm::dvec2 g = sgn * glm::dvec2(glm::dot(mn, tu), glm::dot(mn, tw));
-      const double c0 = sgn * glm::dot(mn, tbase - a) - offset;  // keep g·q + c0 >= 0
-      if (!clipHalfPlane(sc.target2, g, c0, sc.clip)) return false;
-      double d2c;
-      const glm::dvec3 q = pa.target - tbase;
-      const glm::dvec2 q2 = closestInConvex(sc.clip, {glm::dot(q, tu), glm::dot(q, tw)}, d2c);
-      const glm::dvec3 p2 = target3(q2);
-      if (!(glm::length(p2 - pa.target) > end_gap)) return false;
-      e_out = pa.eye, p_out = p2;
+  return true;
+}
+
+// The proof's first items: each region piece's part in front of the target, shrunk, against
+// the whole inset target. False when the proof cannot finish (more items than rays, or a piece
+// too thin to shrink).
+bool VisibilityScene::Impl::Query::proofItems(uint32_t max_items) {
+  sc_.pool.clear();
+  sc_.items.clear();
+  const uint32_t t_first = 0, t_count = static_cast<uint32_t>(sc_.target2.size());
+  sc_.pool.insert(sc_.pool.end(), sc_.target2.begin(), sc_.target2.end());
+  // Only the part of each piece in front of the target (by the minimum gap) casts rays.
+  const Plane& tp = shape_.plane;
+  const glm::dvec2 g{tp.n.x, tp.n.z};
+  const double c0 = tp.n.y * height_ - tp.d - min_gap_;
+  for (const auto& piece : sc_.pieces) {
+    // Each item costs at least one ray of the budget, so with more items than rays the proof
+    // cannot finish: stop before shrinking the rest (a region of a whole level has thousands of
+    // pieces, and shrinking them was most of a test's time there).
+    if (sc_.items.size() > max_items) return false;
+    if (circleBehind(piece, g, c0) || !clipHalfPlane(piece.v, g, c0, sc_.clip)) continue;
+    // Shrunk by four times the eye margin of the covers (a patch's separating plane keeps the
+    // margin on both sides, so twice it from the eyes): region edges usually lie on walls, and an
+    // eye on a wall's plane (or at a room's corner) crosses it nowhere inside its outline. No
+    // more than that: HFD regions can be a few samples' insets wide, and eyes of the band given
+    // up here see what the proof would hide (a band of half the inset, as this once was, made
+    // freedoom2 MAP01's pixel error 30 times larger with the proof run before any ray). A piece
+    // too thin to shrink is not proved at all.
+    sc_.poly = sc_.clip;
+    for (size_t k = 0; k < sc_.poly.size(); ++k) {
+      const glm::dvec2 a = sc_.poly[k], ab = sc_.poly[(k + 1) % sc_.poly.size()] - a;
+      const double len = glm::length(ab);
+      if (!(len > 0.0)) continue;
+      const glm::dvec2 inward = glm::dvec2(-ab.y, ab.x) / len;
+      if (!clipHalfPlane(sc_.clip, inward, -glm::dot(inward, a) - 4.0 * min_gap_, sc_.poly2)) return false;
+      sc_.clip.swap(sc_.poly2);
+    }
+    const uint32_t first = static_cast<uint32_t>(sc_.pool.size());
+    sc_.pool.insert(sc_.pool.end(), sc_.clip.begin(), sc_.clip.end());
+    sc_.items.push_back({first, static_cast<uint32_t>(sc_.clip.size()), t_first, t_count, 0});
+  }
+  return true;
+}
+
+glm::dvec2 VisibilityScene::Impl::Query::centroidOf(uint32_t first, uint32_t count) const {
+  glm::dvec2 c{0.0};
+  for (uint32_t k = 0; k < count; ++k) c += sc_.pool[first + k];
+  return c / static_cast<double>(count);
+}
+
+// Halves the polygon pool[first, +count) across its longest vertex-to-vertex direction; the
+// halves are appended to the pool. False when it cannot be split.
+bool VisibilityScene::Impl::Query::halve(uint32_t first, uint32_t count, uint32_t out[4]) {
+  glm::dvec2 axis{0.0};
+  double best = 0.0;
+  for (uint32_t a = 0; a < count; ++a)
+    for (uint32_t b = a + 1; b < count; ++b) {
+      const glm::dvec2 d = sc_.pool[first + b] - sc_.pool[first + a];
+      if (glm::dot(d, d) > best) best = glm::dot(d, d), axis = d;
+    }
+  if (!(best > 0.0)) return false;
+  const glm::dvec2 c = centroidOf(first, count);
+  sc_.poly.assign(sc_.pool.begin() + first, sc_.pool.begin() + first + count);
+  for (int side = 0; side < 2; ++side) {
+    const glm::dvec2 gs = side == 0 ? axis : -axis;
+    if (!clipHalfPlane(sc_.poly, gs, -glm::dot(gs, c), sc_.clip)) return false;
+    out[2 * side] = static_cast<uint32_t>(sc_.pool.size());
+    out[2 * side + 1] = static_cast<uint32_t>(sc_.clip.size());
+    sc_.pool.insert(sc_.pool.end(), sc_.clip.begin(), sc_.clip.end());
+  }
+  return true;
+}
+
+// 1 proved hidden, 2 a ray was unblocked (visible, clear_eye_ its eye), 0 neither.
+int VisibilityScene::Impl::Query::proveHidden() {
+  const uint32_t max_items =
+      opt_.conservative ? std::max(opt_.proof_rays, opt_.conservative_proof_rays) : opt_.proof_rays;
+  if (!proofItems(max_items)) return 0;
+  uint32_t budget = max_items;
+  while (!sc_.items.empty()) {
+    const ProofItem it = sc_.items.back();
+    sc_.items.pop_back();
+    const std::span<const glm::dvec2> rp(sc_.pool.data() + it.region_first, it.region_count);
+    const std::span<const glm::dvec2> tq(sc_.pool.data() + it.target_first, it.target_count);
+    const glm::dvec3 e = eyeAt(centroidOf(it.region_first, it.region_count));
+    const glm::dvec3 p = target3(centroidOf(it.target_first, it.target_count));
+    bool covered = false;
+    double tnear = 0.0;
+    uint32_t last_outline = UINT32_MAX;
+    bool parts3 = false;
+    for (uint32_t hits = 0; hits < kProofHits && budget > 0 && !covered; ++hits) {
+      Hit hit;
+      const int r = castClear(e, p, &hit, tnear);
+      if (r < 0) return 0;
+      --budget;
+      if (r == 1 && hits == 0) clear_eye_ = e;
+      if (r == 1) return hits == 0 ? 2 : 0;  // past the first blocker: not a sampled ray
+      const uint32_t o = s_.fragment_outline[hit.fragment];
+      // The next blocker along the same ray: a relative step past this hit, 1e-6 of the ray,
+      // far above float rounding of t and far below any wall's thickness along it.
+      tnear = hit.t + 1e-6;
+      if (o == last_outline) continue;
+      last_outline = o;
+      covered = covers(o, rp, tq);
+      if (!covered && opt_.fuse_occluders) {
+        if (!parts3) {  // the item's parts in 3D, once for all the blockers tried
+          sc_.region3.clear();
+          sc_.target3.clear();
+          for (const auto& rv : rp) sc_.region3.push_back(eyeAt(rv));
+          for (const auto& t : tq) sc_.target3.push_back(target3(t));
+          parts3 = true;
+        }
+        covered = s_.patchCovers(o, shape_.outline, sc_.region3, sc_.target3, min_gap_, end_gap_, min_gap_, sc_);
+        if (covered) ++counters_.patch_covers;
+      }
+    }
+    if (covered) continue;
+    if (it.depth >= kMaxProofDepth || budget == 0) return 0;
+    // Halve whichever of R and T is larger, in scene units.
+    const bool split_region = diameter2(rp) >= diameter2(tq);
+    uint32_t halves[4];
+    if (!halve(split_region ? it.region_first : it.target_first, split_region ? it.region_count : it.target_count,
+               halves))
+      return 0;
+    for (int k = 1; k >= 0; --k) {
+      ProofItem child = it;
+      child.depth = it.depth + 1;
+      if (split_region) child.region_first = halves[2 * k], child.region_count = halves[2 * k + 1];
+      else child.target_first = halves[2 * k], child.target_count = halves[2 * k + 1];
+      sc_.items.push_back(child);
+    }
+  }
+  return 1;
+}
+
+// ---- 1. Uniform samples ----
+// Eyes: a quarter of the samples at corners (all corners when fewer), a quarter along the edges,
+// a quarter in front of the target (near_samples), the rest inside by area.
+void VisibilityScene::Impl::Query::sampleEyes() {
+  const uint32_t R = std::max<uint32_t>(1, opt_.region_samples);
+  sc_.eyes.clear();
+  size_t corners = 0;
+  for (const auto& p : sc_.pieces) corners += p.v.size();
+  const uint32_t n_corner = static_cast<uint32_t>(std::min<size_t>(corners, std::max<uint32_t>(1, R / 4)));
+  const uint32_t n_edge = std::min<uint32_t>(R - std::min(R, n_corner), std::max<uint32_t>(1, R / 4));
+  const uint32_t n_near = opt_.near_samples ? std::min<uint32_t>(R - std::min(R, n_corner + n_edge), R / 4) : 0;
+  const uint32_t n_area = R - std::min(R, n_corner + n_edge + n_near);
+  const double stride = static_cast<double>(corners) / n_corner;
+  const double offset = uniform01(rng_);
+  for (uint32_t k = 0; k < n_corner; ++k) {
+    size_t idx = static_cast<size_t>((k + offset) * stride) % corners;
+    for (const auto& p : sc_.pieces) {
+      if (idx < p.v.size()) {
+        sc_.eyes.push_back(eyeAt(pullTowards(p.v[idx], p.centroid, 0.0, region_inset_)));
+        break;
+      }
+      idx -= p.v.size();
+    }
+  }
+  // Along the perimeter (stratified, one random offset).
+  const double off = uniform01(rng_);
+  for (uint32_t k = 0; k < n_edge; ++k) {
+    double at = (k + off) / n_edge * sc_.perimeter;
+    bool done = false;
+    for (const auto& p : sc_.pieces) {
+      for (size_t i = 0; i < p.v.size() && !done; ++i) {
+        const glm::dvec2 a = p.v[i], b = p.v[(i + 1) % p.v.size()];
+        const double len = glm::length(b - a);
+        if (at <= len || (&p == &sc_.pieces.back() && i + 1 == p.v.size())) {
+          const glm::dvec2 q = len > 0.0 ? a + std::min(at / len, 1.0) * (b - a) : a;
+          sc_.eyes.push_back(eyeAt(pullTowards(q, p.centroid, 0.0, region_inset_)));
+          done = true;
+        }
+        at -= len;
+      }
+      if (done) break;
+    }
+  }
+  // In front of the target: the region's nearest point to a point of the target moved out along
+  // its normal, at stratified distances up to the target's diameter. A wall of one room of a
+  // large region is seen from that room only, which area samples hit rarely (docs/DESIGN.md,
+  // "Sizes and errors": room grids); these eyes stand in it, facing the wall from a useful distance.
+  if (n_near > 0) {
+    const double diameter = std::sqrt(diameter2(sc_.target2));
+    for (uint32_t k = 0; k < n_near; ++k) {
+      const glm::dvec2 q = k == 0 ? tc_ : pointInConvex(sc_.target_c, uniform01(rng_), uniform01(rng_), sc_.tri_cum);
+      const glm::dvec3 in_front = target3(q) + shape_.plane.n * (diameter * (k + uniform01(rng_)) / n_near);
+      const std::optional<glm::dvec2> eye2 =
+          nearestInPieces(sc_.pieces, {in_front.x, in_front.z}, region_inset_, nullptr, 0.0, sc_.clip, sc_.grid);
+      sc_.eyes.push_back(eyeAt(eye2.value_or(glm::dvec2(0.0))));
+    }
+  }
+  // Inside: stratified over the area (1D strata over the pieces' cumulative area, jittered).
+  sc_.piece_cum.clear();
+  double acc = 0.0;
+  for (const auto& p : sc_.pieces) sc_.piece_cum.push_back(acc += p.area);
+  for (uint32_t k = 0; k < n_area; ++k) {
+    const double at = (k + uniform01(rng_)) / n_area * sc_.region_area;
+    size_t pi = std::lower_bound(sc_.piece_cum.begin(), sc_.piece_cum.end(), at) - sc_.piece_cum.begin();
+    if (pi >= sc_.pieces.size()) pi = sc_.pieces.size() - 1;
+    const glm::dvec2 q = pointInConvex(sc_.pieces[pi], uniform01(rng_), uniform01(rng_), sc_.tri_cum);
+    sc_.eyes.push_back(eyeAt(pullTowards(q, sc_.pieces[pi].centroid, 0.0, region_inset_)));
+  }
+}
+
+// Target points: up to half the samples at corners, the rest by area. Then the pairs.
+void VisibilityScene::Impl::Query::sampleTargets() {
+  const uint32_t P = std::max<uint32_t>(1, opt_.polygon_samples);
+  sc_.targets.clear();
+  const uint32_t n_corner = std::min<uint32_t>(static_cast<uint32_t>(sc_.target2.size()), P / 2);
+  for (uint32_t k = 0; k < n_corner; ++k) sc_.targets.push_back(target3(sc_.target2[k * sc_.target2.size() / n_corner]));
+  const uint32_t n_area = P - n_corner;
+  for (uint32_t k = 0; k < n_area; ++k) {
+    // Stratified in the first coordinate, which picks the fan triangle and one barycentric.
+    const double u = (k + uniform01(rng_)) / n_area;
+    sc_.targets.push_back(target3(pointInConvex(sc_.target_c, u, uniform01(rng_), sc_.tri_cum)));
+  }
+  ne_ = static_cast<uint32_t>(sc_.eyes.size());
+  nt_ = static_cast<uint32_t>(sc_.targets.size());
+  pairs_ = static_cast<uint64_t>(ne_) * nt_;
+  next_pair_ = 0;
+}
+
+// Casts packets until `packets` were cast or the pairs run out; true when a ray was unblocked
+// (clear_eye_ its eye). Diagonal order: block b pairs eye i with target (b + i) mod nt, so every
+// pair comes once and the first block already uses every eye. Rays go in packets of
+// Impl::kPacket (the answer does not depend on the packet size: any unblocked ray keeps the
+// fragment).
+bool VisibilityScene::Impl::Query::uniformPackets(uint64_t packets) {
+  glm::dvec3 pe[Impl::kPacket], pt[Impl::kPacket];
+  double pf[Impl::kPacket];
+  for (uint64_t cast = 0; cast < packets && next_pair_ < pairs_; ++cast) {
+    int n = 0;
+    for (; next_pair_ < pairs_ && n < Impl::kPacket; ++next_pair_) {
+      const uint32_t i = static_cast<uint32_t>(next_pair_ % ne_);
+      const uint32_t j = static_cast<uint32_t>((next_pair_ / ne_ + i) % nt_);
+      const double tfar = rayEnd(sc_.eyes[i], sc_.targets[j]);
+      if (!(tfar > 0.0)) continue;
+      pe[n] = sc_.eyes[i], pt[n] = sc_.targets[j], pf[n] = tfar;
+      ++n;
+    }
+    if (n == 0) break;
+    counters_.rays += static_cast<uint64_t>(n);
+    const int clear = s_.firstClear16(pe, pt, pf, n);
+    if (clear >= 0) {
+      clear_eye_ = pe[clear];
       return true;
     }
-    // (b) Keep the target point, move the eye: the same with the plane through the target point
-    // and the edge, cut with the height plane; the nearest such point of the region.
-    const glm::dvec3 m3 = glm::cross(edge, a - pa.target);
+  }
+  return false;
+}
+
+// ---- 2. Refinement: step past the edges of the nearest blockers ----
+// A step's ray is worked out only when it comes off the queue (most never do: the budget runs
+// out first); the order of the queue is the same as if each were worked out when pushed, and a
+// step that yields no ray is dropped then, as it would have been.
+bool VisibilityScene::Impl::Query::stepRay(const StepParent& pa, uint32_t k, uint32_t variant, glm::dvec3& e_out,
+                                           glm::dvec3& p_out) const {
+  const uint32_t of = s_.outline_first[pa.outline], oc = s_.outline_first[pa.outline + 1] - of;
+  const glm::dvec3 a = s_.outline_vertices[of + k], b = s_.outline_vertices[of + (k + 1) % oc];
+  const glm::dvec3 edge = b - a;
+  const double el = glm::length(edge);
+  if (!(el > 0.0)) return false;
+  const glm::dvec3 dir = pa.target - pa.eye;
+  const double margin = std::max(end_gap_, kStepMargin * pa.hit_t * glm::length(dir));
+  // Outline counter-clockwise seen from the blocker's front: outside is to the edge's right.
+  const glm::dvec3 out = glm::normalize(glm::cross(edge, pa.blocker_normal));
+  const glm::dvec3 xp = closestOnSegment(a, b, pa.x) + margin * out;
+  if (variant == 0) {
+    // (a) Keep the eye, move the target point: the eye and the edge span a plane; target
+    // points on xp's side of it (by the margin scaled to the target's distance) are seen past
+    // the edge. The nearest such point of the inset target to the current one.
+    const glm::dvec3 m3 = glm::cross(edge, a - pa.eye);
     const double ml = glm::length(m3);
     if (!(ml > 0.0)) return false;
     const glm::dvec3 mn = m3 / ml;
     const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
-    const double to_hit = std::max((1.0 - pa.hit_t) * glm::length(dir), end_gap);
-    const double offset = margin * glm::length(dir) / to_hit;
-    const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
-    const double c0 = sgn * (mn.y * (height - a.y) - mn.x * a.x - mn.z * a.z) - offset;
-    const std::optional<glm::dvec2> e2 = nearestInPieces(sc.pieces, {pa.eye.x, pa.eye.z}, region_inset, &g, c0, sc.clip, sc.grid);
-    if (!e2) return false;
-    const glm::dvec3 e3 = eyeAt(*e2);
-    if (!(glm::length(e3 - pa.eye) > end_gap)) return false;
-    e_out = e3, p_out = pa.target;
+    const double offset = margin * glm::length(dir) / std::max(pa.hit_t * glm::length(dir), end_gap_);
+    const glm::dvec2 g = sgn * glm::dvec2(glm::dot(mn, tu_), glm::dot(mn, tw_));
+    const double c0 = sgn * glm::dot(mn, tbase_ - a) - offset;  // keep g·q + c0 >= 0
+    if (!clipHalfPlane(sc_.target2, g, c0, sc_.clip)) return false;
+    double d2c;
+    const glm::dvec3 q = pa.target - tbase_;
+    const glm::dvec2 q2 = closestInConvex(sc_.clip, {glm::dot(q, tu_), glm::dot(q, tw_)}, d2c);
+    const glm::dvec3 p2 = target3(q2);
+    if (!(glm::length(p2 - pa.target) > end_gap_)) return false;
+    e_out = pa.eye, p_out = p2;
     return true;
-  };
-  uint32_t budget = opt.refine_rays;
-  while (head < sc.queue.size() && budget > 0) {
-    const Probe pr = sc.queue[head++];
+  }
+  // (b) Keep the target point, move the eye: the same with the plane through the target point
+  // and the edge, cut with the height plane; the nearest such point of the region.
+  const glm::dvec3 m3 = glm::cross(edge, a - pa.target);
+  const double ml = glm::length(m3);
+  if (!(ml > 0.0)) return false;
+  const glm::dvec3 mn = m3 / ml;
+  const double sgn = glm::dot(mn, xp - a) >= 0.0 ? 1.0 : -1.0;
+  const double to_hit = std::max((1.0 - pa.hit_t) * glm::length(dir), end_gap_);
+  const double offset = margin * glm::length(dir) / to_hit;
+  const glm::dvec2 g = sgn * glm::dvec2(mn.x, mn.z);
+  const double c0 = sgn * (mn.y * (height_ - a.y) - mn.x * a.x - mn.z * a.z) - offset;
+  const std::optional<glm::dvec2> e2 =
+      nearestInPieces(sc_.pieces, {pa.eye.x, pa.eye.z}, region_inset_, &g, c0, sc_.clip, sc_.grid);
+  if (!e2) return false;
+  const glm::dvec3 e3 = eyeAt(*e2);
+  if (!(glm::length(e3 - pa.eye) > end_gap_)) return false;
+  e_out = e3, p_out = pa.target;
+  return true;
+}
+
+bool VisibilityScene::Impl::Query::refine(glm::dvec2* witness) {
+  if (opt_.refine_rays == 0) return false;
+  sc_.queue.clear();
+  // Seeds: eyes in sample order (corners and edges first) each against a target point, spread
+  // over the uniform pairs.
+  const uint32_t seeds = std::max<uint32_t>(1, std::min<uint32_t>(opt_.refine_rays / 16, ne_ * nt_));
+  for (uint32_t k = 0; k < seeds; ++k) {
+    const uint32_t i = k % ne_;
+    const uint32_t j = static_cast<uint32_t>((k / ne_ + k * 7 + 3) % nt_);
+    Probe seed;
+    seed.eye = sc_.eyes[i], seed.target = sc_.targets[j];
+    sc_.queue.push_back(seed);
+  }
+  size_t head = 0;
+  sc_.parents.clear();
+  uint32_t budget = opt_.refine_rays;
+  while (head < sc_.queue.size() && budget > 0) {
+    const Probe pr = sc_.queue[head++];
     glm::dvec3 eye = pr.eye, target = pr.target;
-    if (pr.parent != Probe::kNoParent &&
-        !stepRay(sc.parents[pr.parent], pr.edge, pr.variant, eye, target))
-      continue;
+    if (pr.parent != Probe::kNoParent && !stepRay(sc_.parents[pr.parent], pr.edge, pr.variant, eye, target)) continue;
     Hit hit;
     const int r = castClear(eye, target, &hit);
     if (r < 0) continue;
     --budget;
-    ++counters.refine_rays;
+    ++counters_.refine_rays;
     if (r == 1) {
-      ++counters.visible;
-      ++counters.refined_visible;
-      if (witness) *witness = {eye.x, eye.z};
-      return true;
+      ++counters_.refined_visible;
+      return visibleWith(witness, eye);
     }
     if (pr.depth >= kMaxStepDepth || budget == 0) continue;
     const glm::dvec3 x = eye + hit.t * (target - eye);
-    const uint32_t o = s.fragment_outline[hit.fragment];
-    const uint32_t of = s.outline_first[o], oc = s.outline_first[o + 1] - of;
+    const uint32_t o = s_.fragment_outline[hit.fragment];
+    const uint32_t of = s_.outline_first[o], oc = s_.outline_first[o + 1] - of;
     if (oc < 3) continue;
-    sc.edge_order.clear();
+    sc_.edge_order.clear();
     for (uint32_t k = 0; k < oc; ++k) {
-      const glm::dvec3 a = s.outline_vertices[of + k], b = s.outline_vertices[of + (k + 1) % oc];
+      const glm::dvec3 a = s_.outline_vertices[of + k], b = s_.outline_vertices[of + (k + 1) % oc];
       const glm::dvec3 q = closestOnSegment(a, b, x);
-      sc.edge_order.push_back({glm::dot(q - x, q - x), k});
+      sc_.edge_order.push_back({glm::dot(q - x, q - x), k});
     }
-    std::sort(sc.edge_order.begin(), sc.edge_order.end());
-    const uint32_t parent = static_cast<uint32_t>(sc.parents.size());
-    sc.parents.push_back({eye, target, x, hit.t, o, s.fragments[hit.fragment].plane.n});
+    std::sort(sc_.edge_order.begin(), sc_.edge_order.end());
+    const uint32_t parent = static_cast<uint32_t>(sc_.parents.size());
+    sc_.parents.push_back({eye, target, x, hit.t, o, s_.fragments[hit.fragment].plane.n});
     for (uint32_t m = 0; m < oc; ++m)
       for (uint32_t variant = 0; variant < 2; ++variant) {
         Probe child;
         child.depth = pr.depth + 1;
         child.parent = parent;
-        child.edge = sc.edge_order[m].second;
+        child.edge = sc_.edge_order[m].second;
         child.variant = variant;
-        sc.queue.push_back(child);
+        sc_.queue.push_back(child);
       }
   }
   return false;

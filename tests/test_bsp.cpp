@@ -779,7 +779,7 @@ uint32_t addBox(Scene& scene, const glm::dvec3& c, const glm::dvec3& h, double y
 
 // A 12 × 3 × 12 room (floor, ceiling and walls facing in, one object) split by an inner wall at
 // x = 6 with a 1 m doorway (z in [5.5, 6.5]), furnished with `boxes` random boxes, some turned,
-// and the hard cases of the issue: a box whose face lies in a wall's plane (touching it), two
+// and the hard cases of detail objects: a box whose face lies in a wall's plane (touching it), two
 // interpenetrating boxes, and a box straddling the doorway.
 Scene furnishedRoom(uint64_t seed, int boxes) {
   std::mt19937_64 rng(seed);

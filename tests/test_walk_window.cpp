@@ -4,7 +4,6 @@
 // 0 differing pixels; both are Mesa's llvmpipe, one through GLX, one through OSMesa, and both
 // draw with the same SceneDrawer code). The path ends on the start view, where the animated blob
 // (a mesh object, animated on the path's clock in both) must show. Skipped where xvfb-run is missing.
-#include <png.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "bsp/bsp.h"
+#include "png_test_util.h"
 #include "scenes/scene.h"
 #include "walkthrough/camera_path.h"
 
@@ -25,24 +25,6 @@ namespace walkvis {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Image {
-  int width = 0, height = 0;
-  std::vector<uint8_t> rgb;
-};
-
-// An 8-bit RGB PNG (what writePngRgb writes); empty image when it cannot be read.
-Image readPng(const std::string& path) {
-  Image img;
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&png, path.c_str())) return img;
-  png.format = PNG_FORMAT_RGB;
-  img.width = static_cast<int>(png.width), img.height = static_cast<int>(png.height);
-  img.rgb.resize(PNG_IMAGE_SIZE(png));
-  if (!png_image_finish_read(&png, nullptr, img.rgb.data(), 0, nullptr)) return {};
-  return img;
-}
 
 int run(const std::string& command) {
   const int status = std::system(command.c_str());

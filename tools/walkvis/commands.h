@@ -39,5 +39,6 @@ void addWalkCommand(CLI::App& app, CommandRunner& runner);  // cmd_walk.cpp, wal
 void addBenchFrames(CLI::App& bench, CommandRunner& runner);  // cmd_bench_frames.cpp: `bench frames`
 void addStatsCommand(CLI::App& app, CommandRunner& runner);  // cmd_stats.cpp: `stats`
 void addBenchHfd(CLI::App& bench, CommandRunner& runner);  // cmd_bench_hfd.cpp: `bench hfd`, `bench rays`
+void addReportCommand(CLI::App& app, CommandRunner& runner);  // cmd_report.cpp: `report`
 
 }  // namespace walkvis

@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   addRenderCommand(app, runner);
   addWalkCommand(app, runner);
   addStatsCommand(app, runner);
+  addReportCommand(app, runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -199,7 +199,7 @@ int runReport(const ReportArgs& args) {
   const bool is_tree = isTreeFile(args.source);
   const std::string scene = is_tree ? args.scene : args.source;
   const std::string tree = is_tree ? args.source : (dir / "tree.wvt").string();
-  Steps steps(self, dir, (scene.empty() ? 0 : 1) + (is_tree ? 0 : 1) + 5);
+  Steps steps(self, dir, (scene.empty() ? 0 : 8) + (is_tree ? 0 : 1) + 5);  // info and 7 sweeps; build; the rest
 
   Json info, build;
   if (!scene.empty())
@@ -235,6 +235,35 @@ int runReport(const ReportArgs& args) {
   if (!scene.empty()) bench.insert(bench.end(), {"--scene", scene});
   bench.insert(bench.end(), {"--frames", std::to_string(args.frames), "--rounds", "2", "--json"});
   const Json frames = steps.run("frame times", bench, "frames.json");
+
+  // Speed against error, on the scene (these commands load it themselves).
+  std::vector<std::vector<std::string>> mask_rows, tr_rows;
+  if (!scene.empty()) {
+    steps.run("the HFD sampling sweep",
+              {"bench", "hfd", scene, "--region-samples", "4,16", "--polygon-samples", "8", "--refine-rays", "0,256",
+               "--views", std::to_string(std::max(4, args.views / 5)), "--res", "32", "--max-seconds", "300", "--csv",
+               (dir / "hfd-sweep.csv").string(), "--png", (dir / "hfd-sweep.png").string()},
+              "");
+    auto backface = [&](const std::string& what, const std::vector<std::string>& extra, const std::string& name) {
+      std::vector<std::string> a = {"bench", "backface", "--mesh", scene, "--eyes", "200", "--runs", "1",
+                                    "--no-bunny", "--lists", "", "--json"};
+      a.insert(a.end(), extra.begin(), extra.end());
+      const Json j = steps.run(what, a, name);
+      return j.is_array() && !j.empty() && !j[0]["methods"].empty() ? j[0]["methods"][0] : Json::object();
+    };
+    auto row = [](const std::string& knob, const Json& m) {
+      return std::vector<std::string>{knob, pct(m.value("culled_ratio", 0.0)), pct(m.value("effectiveness", 0.0)),
+                                      fmt(m.value("ns_per_polygon", 0.0), 3), fmt(m.value("bytes_per_polygon", 0.0), 2),
+                                      std::to_string(m.value("false_culls", 0))};
+    };
+    // One step each for the two backface sweeps (three points each).
+    for (const char* n : {"2", "4", "8"})
+      mask_rows.push_back(row(n, backface(std::string("normal-mask resolution ") + n,
+                                          {"--only", "mask", "--mask-n", n}, std::string("mask-") + n + ".json")));
+    for (const char* t : {"0.1", "0.5", "2"})
+      tr_rows.push_back(row(t, backface(std::string("Johannsen-Carter T/R ") + t, {"--only", "cluster", "--tr", t},
+                                        std::string("cluster-tr-") + t + ".json")));
+  }
 
   Page page;
   const std::string title = "walkvis report: " + (scene.empty() ? tree : scene);
@@ -357,8 +386,47 @@ int runReport(const ReportArgs& args) {
     page.table({"mode", "frame ms", "round spread", "drawn", "speed-up", "of the ideal"}, rows);
   }
   page.h2("Speed against error");
-  page.p("The sweeps of sampling, normal-mask resolution and Johannsen&ndash;Carter T/R are not in this page yet; "
-         "docs/hfd/ holds the HFD sampling sweeps.");
+  if (scene.empty()) {
+    page.p("No scene was given (<code>--scene</code>), so the sweeps were not run.");
+  } else {
+    page.p("HFD sampling (region samples 4 and 16, polygon samples 8, refinement rays 0 and 256): tree build "
+           "seconds across, pixel error up (log scale), one labelled point per row of the table.");
+    if (fs::exists(dir / "hfd-sweep.png")) page.img("hfd-sweep.png", "HFD sampling: build seconds against pixel error");
+    rows.clear();
+    std::ifstream csv(dir / "hfd-sweep.csv");
+    std::string line;
+    std::vector<std::string> head;
+    auto split = [](const std::string& l) {
+      std::vector<std::string> f;
+      std::stringstream ss(l);
+      std::string x;
+      while (std::getline(ss, x, ',')) f.push_back(x);
+      return f;
+    };
+    if (std::getline(csv, line)) head = split(line);
+    auto col = [&](const std::vector<std::string>& f, const std::string& name) {
+      const auto it = std::find(head.begin(), head.end(), name);
+      const size_t i = static_cast<size_t>(it - head.begin());
+      return it != head.end() && i < f.size() ? f[i] : std::string();
+    };
+    while (std::getline(csv, line)) {
+      const auto f = split(line);
+      rows.push_back({col(f, "point"), col(f, "region_samples"), col(f, "polygon_samples"), col(f, "refine_rays"),
+                      col(f, "build_seconds"), col(f, "rays"), col(f, "pixel_error_ratio"),
+                      col(f, "eyes_with_miss"), col(f, "rejection_ratio")});
+    }
+    page.table({"point", "region samples", "polygon samples", "refine rays", "build s", "rays", "pixel error",
+                "eyes with a miss", "rejection"},
+               rows);
+    page.p("Backface culling of the scene's polygons over 200 random eyes (<code>walkvis bench backface</code>): "
+           "the share culled and the share of back faces found (effectiveness) against the time per polygon. "
+           "A conservative method never culls a front face (false culls 0).");
+    page.p("Normal mask, cells per cube-face side:");
+    page.table({"cells", "culled", "effectiveness", "ns per polygon", "bytes per polygon", "false culls"}, mask_rows);
+    page.p("Johannsen&ndash;Carter clusters, T/R (cluster test time over vertex time):");
+    page.table({"T/R", "culled", "effectiveness", "ns per polygon", "bytes per polygon", "false culls"}, tr_rows);
+    page.p("Z-buffer precision against order errors: the table under Validation.");
+  }
 
   const std::string html = page.str(title);
   writeFileAtomically((dir / "index.html").string(),

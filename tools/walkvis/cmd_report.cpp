@@ -152,6 +152,11 @@ class Page {
     html_ << "<figure><img src=\"" << htmlEscape(src) << "\" alt=\"" << htmlEscape(alt) << "\"><figcaption>"
           << htmlEscape(alt) << "</figcaption></figure>\n";
   }
+  // A small image that links to itself at full size (plans of many levels).
+  void thumb(const std::string& src, const std::string& alt) {
+    html_ << "<figure class=\"thumb\"><a href=\"" << htmlEscape(src) << "\"><img src=\"" << htmlEscape(src)
+          << "\" alt=\"" << htmlEscape(alt) << "\"></a><figcaption>" << htmlEscape(alt) << "</figcaption></figure>\n";
+  }
   void table(const std::vector<std::string>& head, const std::vector<std::vector<std::string>>& rows) {
     html_ << "<table><tr>";
     for (const auto& h : head) html_ << "<th>" << htmlEscape(h) << "</th>";
@@ -169,7 +174,7 @@ class Page {
            "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}"
            "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #bbb;padding:2px 8px;"
            "text-align:right}th{background:#eee}figure{display:inline-block;margin:.5em}"
-           "img{border:1px solid #ccc;max-width:100%}figcaption{font-size:90%;color:#555}</style>\n"
+           "img{border:1px solid #ccc;max-width:100%}.thumb img{width:240px}figcaption{font-size:90%;color:#555}</style>\n"
            "</head><body>\n" +
            html_.str() +
            // For a reader of the page's DOM (the page test): how many of its images loaded.
@@ -276,8 +281,16 @@ int runReport(const ReportArgs& args) {
   std::vector<fs::path> plans;
   for (const auto& e : fs::directory_iterator(dir / "plan", ec))
     if (e.path().extension() == ".png") plans.push_back(e.path());
-  std::sort(plans.begin(), plans.end());
-  for (const fs::path& pl : plans) page.img("plan/" + pl.filename().string(), "Plan of " + pl.stem().string());
+  // level-K.png in level order (not as strings: level-10 after level-9).
+  auto levelOf = [](const fs::path& pl) {
+    const std::string stem = pl.stem().string();
+    const size_t dash = stem.rfind('-');
+    return dash == std::string::npos ? 0L : std::strtol(stem.c_str() + dash + 1, nullptr, 10);
+  };
+  std::sort(plans.begin(), plans.end(), [&](const fs::path& a, const fs::path& b) { return levelOf(a) < levelOf(b); });
+  if (!plans.empty())
+    page.p("Plans, one per level (green: the level's walkable region; click for the full size):");
+  for (const fs::path& pl : plans) page.thumb("plan/" + pl.filename().string(), pl.stem().string());
   std::vector<std::vector<std::string>> rows;
   if (info.is_object()) {
     rows.push_back({"polygons", std::to_string(info.value("polygons", 0))});

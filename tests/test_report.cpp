@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "command_test_util.h"
 #include "png_test_util.h"
 
 namespace walkvis {
@@ -21,15 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int run(const std::string& command) {
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string readText(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
+int run(const std::string& command) { return runCommand(command); }
 
 bool haveChromium() { return run("command -v chromium > /dev/null 2>&1") == 0; }
 

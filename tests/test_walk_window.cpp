@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "bsp/bsp.h"
+#include "command_test_util.h"
 #include "png_test_util.h"
 #include "scenes/scene.h"
 #include "walkthrough/camera_path.h"
@@ -26,10 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int run(const std::string& command) {
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+int run(const std::string& command) { return runCommand(command); }
 
 bool haveXvfb() { return run("command -v xvfb-run >/dev/null 2>&1") == 0; }
 

@@ -26,10 +26,11 @@ int run(const std::string& command) { return runCommand(command); }
 bool haveChromium() { return run("command -v chromium > /dev/null 2>&1") == 0; }
 
 std::string chromium(const fs::path& dir) {
-  // The flags this machine's headless Chromium needs (software GL, root without a sandbox), and a
-  // profile of its own so that nothing outside the test folder is touched.
+  // The flags this machine's headless Chromium needs (software GL, root without a sandbox, a
+  // container's small /dev/shm left alone), and a profile of its own so that nothing outside the
+  // test folder is touched.
   return "chromium --headless=new --no-sandbox --use-gl=swiftshader --enable-unsafe-swiftshader "
-         "--user-data-dir=" + (dir / "chrome-profile").string() + " ";
+         "--disable-dev-shm-usage --user-data-dir=" + (dir / "chrome-profile").string() + " ";
 }
 
 TEST(Report, PageRendersInChromiumWithEveryImage) {

@@ -139,9 +139,15 @@ std::vector<uint8_t> pfdObjectNodes(const BspTree& bsp, double extent,
 enum class TreeKind : uint8_t { kPfd = 0, kHfd = 1 };
 const char* treeKindName(TreeKind kind);  // "pfd", "hfd"
 
-// Thrown when a build would exceed its memory budget.
+// Thrown when a build would exceed its memory budget. A tree that ran out records how far it got:
+// its bytes when it stopped (a lower bound of what it needs) and the share of its region's area
+// finished by then (0 when unknown), from which the level's message estimates the whole need.
 struct PfdBudgetError : Error {
   using Error::Error;
+  PfdBudgetError(const std::string& what, uint64_t bytes_when_stopped, double area_done)
+      : Error(what), bytes(bytes_when_stopped), area_fraction(area_done) {}
+  uint64_t bytes = 0;
+  double area_fraction = 0.0;
 };
 
 struct PfdStats {

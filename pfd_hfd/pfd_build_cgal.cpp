@@ -1170,9 +1170,10 @@ class Builder {
     const uint64_t bytes = bytesNow();
     if (bytes > options_.max_memory)
       throw PfdBudgetError("pfd: tree needs more than its memory budget of " + std::to_string(options_.max_memory) +
-                           " bytes (" + std::to_string(out_.nodes.size()) + " nodes, " +
-                           std::to_string(out_.fragment_ids.size() + out_.run_refs.size()) +
-                           " list entries so far); raise --max-memory or use smaller view cells");
+                               " bytes (" + std::to_string(out_.nodes.size()) + " nodes, " +
+                               std::to_string(out_.fragment_ids.size() + out_.run_refs.size()) +
+                               " list entries so far); raise --max-memory or use smaller view cells",
+                           bytes, out_.stats.region_area > 0.0 ? std::min(1.0, done_area_ / out_.stats.region_area) : 0.0);
   }
 
   // Undecided lines ahead in the traversal (the first crossing line first), for the heuristic.

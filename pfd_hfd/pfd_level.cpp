@@ -107,9 +107,28 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
   if (planned.size() > 1) say(where + ": " + std::to_string(planned.size()) + " view cells planned");
 
   // Build, in rounds: a cell over its budget is replaced by its quarters and built again.
-  auto totalError = [&] {
-    return PfdBudgetError("pfd: " + where + ": the trees exceed the memory budget of " +
-                          std::to_string(options.max_memory) + " bytes; raise --max-memory");
+  // By how much: `need` bytes are a lower bound of what the trees need (those built and, when a
+  // tree stopped, its bytes then); with the share of that tree's area done, an estimate of the
+  // whole need at the rate it was filling (its bytes grow with the area built, not exactly).
+  auto totalError = [&](uint64_t need, uint64_t stopped_bytes, double stopped_fraction) {
+    const auto gib = [](double b) {  // in the largest binary unit under the value
+      char t[32];
+      if (b >= 0x1p30) std::snprintf(t, sizeof t, "%.2f GiB", b / 0x1p30);
+      else if (b >= 0x1p20) std::snprintf(t, sizeof t, "%.1f MiB", b / 0x1p20);
+      else std::snprintf(t, sizeof t, "%.0f KiB", b / 0x1p10);
+      return std::string(t);
+    };
+    std::string msg = "pfd: " + where + ": the trees exceed the memory budget of " + std::to_string(options.max_memory) +
+                      " bytes (" + gib(static_cast<double>(options.max_memory)) + "): they need at least " +
+                      std::to_string(need) + " bytes (" + gib(static_cast<double>(need)) + ")";
+    if (stopped_fraction > 0.0 && stopped_fraction < 1.0) {
+      const double estimate = static_cast<double>(need - stopped_bytes) + stopped_bytes / stopped_fraction;
+      char t[96];
+      std::snprintf(t, sizeof t, ", about %s at the rate the last tree was filling (%.1f%% of its area built)",
+                    gib(estimate).c_str(), 100.0 * stopped_fraction);
+      msg += t;
+    }
+    return PfdBudgetError(msg + "; raise --max-memory", need, 0.0);
   };
   std::vector<std::optional<PfdTree>> built;
   while (!planned.empty()) {
@@ -142,14 +161,15 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
       try {
         PfdTree tree = buildPfd(bsp, level.walkable, out.height, planned[i].box, o);
         const uint64_t after = used.fetch_add(tree.stats.bytes) + tree.stats.bytes;
-        if (options.max_memory != 0 && after > options.max_memory) throw totalError();
+        if (options.max_memory != 0 && after > options.max_memory) throw totalError(after, 0, 0.0);
         say(cell_name + ": " +
             std::to_string(tree.stats.nodes) + " nodes, " + std::to_string(tree.stats.list_entries) + " list entries, " +
             std::to_string(tree.stats.pool_entries) + " pooled ids, " + std::to_string(tree.stats.bytes) + " bytes, " +
             std::to_string(tree.stats.build_seconds) + " s");
         built[i] = std::move(tree);
-      } catch (const PfdBudgetError&) {
-        if (total_limited[i] && options.max_memory != 0) throw totalError();
+      } catch (const PfdBudgetError& e) {
+        if (total_limited[i] && options.max_memory != 0)
+          throw totalError(used.load() + e.bytes, e.bytes, e.area_fraction);
         over[i] = 1;
       }
     });

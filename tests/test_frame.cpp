@@ -248,14 +248,18 @@ TEST(BenchFrames, FloorAndIdealFrameEveryMode) {
   for (const auto& m : j["modes"]) {
     const std::string mode = m["mode"];
     const double ms = m["frame_ms_median"];
-    if (ms > 0.0) EXPECT_NEAR(m["ideal_fraction"].get<double>(), ideal_ms / ms, 1e-9) << mode;
+    if (ms > 0.0) {
+      EXPECT_NEAR(m["ideal_fraction"].get<double>(), ideal_ms / ms, 1e-9) << mode;
+    }
     if (mode == "floor") {
       EXPECT_EQ(m["drawn_median"], 0.0);
       EXPECT_EQ(m["pixels_differing_from_zbuffer"], 0);
       continue;
     }
     if (mode == "ideal") saw_ideal = true;
-    if (mode != "zbuffer" && mode != "ideal") EXPECT_LE(ideal_drawn, m["drawn_median"].get<double>()) << mode;
+    if (mode != "zbuffer" && mode != "ideal") {
+      EXPECT_LE(ideal_drawn, m["drawn_median"].get<double>()) << mode;
+    }
     // Painter's order over exactly the visible fragments (or the HFD's lists): the same image
     // as the z-buffer but for edge and tie pixels and the HFD's sampled misses, a few in a
     // thousand at most. A start eye on a wall's plane once left a third of the image wrong.

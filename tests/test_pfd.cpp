@@ -346,6 +346,30 @@ TEST(Pfd, BudgetIsAClearError) {
     FAIL() << "no budget error";
   } catch (const PfdBudgetError& e) {
     EXPECT_NE(std::string(e.what()).find("memory budget"), std::string::npos);
+    // How far it got: more bytes than the budget, and a share of the area in [0, 1).
+    EXPECT_GT(e.bytes, options.max_memory);
+    EXPECT_GE(e.area_fraction, 0.0);
+    EXPECT_LT(e.area_fraction, 1.0);
+  }
+}
+
+// A level over the whole budget says by how much: a lower bound above the budget, in bytes (the
+// budget's own measure: the tree's arrays and build-time indexes when it stopped).
+TEST(Pfd, LevelBudgetErrorSaysByHowMuch) {
+  const Scene scene = randomBuilding(2, 14, 1.5);
+  const BspTree bsp = buildBsp(scene);
+  PfdLevelOptions options;
+  options.cell_memory = 0;  // one cell: the whole budget limits the one tree
+  options.max_memory = 4000;
+  uint64_t used = 0;
+  try {
+    (void)buildPfdLevel(bsp, scene.levels[0], 0, 1.5, options, used, nullptr);
+    FAIL() << "no budget error";
+  } catch (const PfdBudgetError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("they need at least " + std::to_string(e.bytes) + " bytes"), std::string::npos) << what;
+    EXPECT_GT(e.bytes, options.max_memory) << what;
+    EXPECT_NE(what.find("of its area built"), std::string::npos) << what;
   }
 }
 

@@ -388,8 +388,8 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
       "build",
       "Build the BSP and a PFD or HFD tree per floor level (view cells where a tree exceeds --cell-memory) into one "
       "tree file (versioned, checksummed, written atomically). Default memory budget: 1 GiB for all trees together, "
-      "64 MiB per view cell; exceeding the budget is an error (exit 2) naming the level, never an out-of-memory "
-      "crash. Progress on stderr.");
+      "64 MiB per view cell; exceeding the budget is an error (exit 2) naming the level and the bytes its trees "
+      "need at least, never an out-of-memory crash. Progress on stderr.");
   addSceneArgs(*sub, args->scene);
   sub->add_option("-o,--output", args->output, "Tree file to write")->required();
   sub->add_option("--tree", args->tree, "Tree kind: pfd, or hfd (hidden fragments rejected by sampled visibility)")

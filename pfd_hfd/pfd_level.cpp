@@ -109,7 +109,8 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
   // Build, in rounds: a cell over its budget is replaced by its quarters and built again.
   // By how much: `need` bytes are a lower bound of what the trees need (those built and, when a
   // tree stopped, its bytes then); with the share of that tree's area done, an estimate of the
-  // whole need at the rate it was filling (its bytes grow with the area built, not exactly).
+  // finished trees and that one at the rate it was filling (its bytes grow with the area built,
+  // not exactly). Cells not yet begun are not in either figure.
   auto totalError = [&](uint64_t need, uint64_t stopped_bytes, double stopped_fraction) {
     const auto gib = [](double b) {  // in the largest binary unit under the value
       char t[32];
@@ -124,11 +125,11 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     if (stopped_fraction > 0.0 && stopped_fraction < 1.0) {
       const double estimate = static_cast<double>(need - stopped_bytes) + stopped_bytes / stopped_fraction;
       char t[96];
-      std::snprintf(t, sizeof t, ", about %s at the rate the last tree was filling (%.1f%% of its area built)",
-                    gib(estimate).c_str(), 100.0 * stopped_fraction);
+      std::snprintf(t, sizeof t, "; the finished trees and the stopped one (%.1f%% of its area built) about %s",
+                    100.0 * stopped_fraction, gib(estimate).c_str());
       msg += t;
     }
-    return PfdBudgetError(msg + "; raise --max-memory", need, 0.0);
+    return PfdBudgetError(msg + ", with cells not yet begun on top; raise --max-memory", need, 0.0);
   };
   std::vector<std::optional<PfdTree>> built;
   while (!planned.empty()) {

@@ -19,6 +19,7 @@
 #include "pfd_hfd/pfd.h"
 #include "pfd_hfd/pfd_internal.h"
 #include "pfd_hfd/pfd_region_cgal.h"
+#include "pfd_hfd/pfd_run_store.h"
 #include "pfd_hfd/pfd_search.h"
 
 namespace walkvis {
@@ -39,15 +40,6 @@ constexpr size_t kSearchMemoBytes = size_t{64} << 20;
 // leaf tested once more or less than the model says differs by its area fraction (a sliver trimmed
 // off, 1e-9 of the extent, or far more).
 constexpr double kOptimalAgreement = 1e-9;
-
-uint64_t hashRun(const uint32_t* ids, size_t n) {
-  uint64_t h = kFnvOffset ^ n;
-  for (size_t i = 0; i < n; ++i) {
-    h = fnv1aWord(h, ids[i]);
-    h ^= h >> 29;
-  }
-  return h;
-}
 
 // A pending step of the back-to-front traversal.
 struct Item {
@@ -375,12 +367,6 @@ class Builder {
 
   bool toRefs() const { return options_.dedup && !hfd(); }
 
-  uint32_t refLength(uint32_t ref) const {
-    if (ref == kEmptyRun) return 0;
-    if (ref & kPfdSeqBit) return out_.seqs[ref & ~kPfdSeqBit].length;
-    if (ref & kPfdObjectBit) return out_.objects[ref & ~kPfdObjectBit].fragments;
-    return out_.runs[ref].count;
-  }
   // The fragment ids an id list expands to: an object mark stands for all its fragments.
   uint64_t idsLength(std::span<const uint32_t> ids) const {
     uint64_t n = 0;
@@ -394,7 +380,6 @@ class Builder {
     }
     return n;
   }
-  uint32_t refDepth(uint32_t ref) const { return ref & kPfdSeqBit ? seq_depth_[ref & ~kPfdSeqBit] : 0; }
 
   // Appends the ids `ref` expands to (sequences nest at most kPfdMaxSeqDepth deep).
   void expandRef(uint32_t ref, std::vector<uint32_t>& out) const {
@@ -500,8 +485,8 @@ class Builder {
     small_near_.clear();
     if (far_child >= 0 && smallSubtree(far_child)) emitSubtree(far_child, r, small_far_);
     if (near_child >= 0 && smallSubtree(near_child)) emitSubtree(near_child, r, small_near_);
-    const uint64_t length = uint64_t{refLength(far_ref)} + idsLength(small_far_) + idsLength(own_) +
-                            idsLength(small_near_) + refLength(near_ref);
+    const uint64_t length = uint64_t{store_.refLength(far_ref)} + idsLength(small_far_) + idsLength(own_) +
+                            idsLength(small_near_) + store_.refLength(near_ref);
     if (length == 0) return kEmptyRun;
     if (length < std::max<uint32_t>(options_.share_min, 1)) {
       flat_.clear();
@@ -531,7 +516,7 @@ class Builder {
       items_.push_back(ref);
     };
     auto add = [&](uint32_t ref) {
-      if (ref != kEmptyRun && refDepth(ref) >= kPfdMaxSeqDepth) {
+      if (ref != kEmptyRun && store_.refDepth(ref) >= kPfdMaxSeqDepth) {
         const PfdSeq q = out_.seqs[ref & ~kPfdSeqBit];
         for (uint32_t k = q.first; k < q.first + q.count; ++k) part(out_.seq_items[k]);
       } else {
@@ -545,26 +530,7 @@ class Builder {
     add(near_ref);
     flush();
     if (items_.size() == 1) return items_[0];
-    return findOrAddSeq(items_, static_cast<uint32_t>(length));
-  }
-
-  uint32_t findOrAddSeq(const std::vector<uint32_t>& items, uint32_t length) {
-    const uint64_t h = hashRun(items.data(), items.size()) ^ 0x5bd1e995ull;
-    auto [lo, hi] = seq_index_.equal_range(h);
-    for (auto it = lo; it != hi; ++it) {
-      const PfdSeq& q = out_.seqs[it->second];
-      if (q.count == items.size() && std::equal(items.begin(), items.end(), out_.seq_items.begin() + q.first))
-        return it->second | kPfdSeqBit;
-    }
-    const uint32_t id = static_cast<uint32_t>(out_.seqs.size());
-    if (id >= kPfdObjectBit) throw PfdBudgetError("pfd: more than 2^30 sequences");
-    uint32_t depth = 0;
-    for (uint32_t item : items) depth = std::max(depth, refDepth(item));
-    out_.seqs.push_back({static_cast<uint32_t>(out_.seq_items.size()), static_cast<uint32_t>(items.size()), length});
-    out_.seq_items.insert(out_.seq_items.end(), items.begin(), items.end());
-    seq_depth_.push_back(static_cast<uint8_t>(depth + 1));
-    seq_index_.emplace(h, id);
-    return id | kPfdSeqBit;
+    return store_.findOrAddSeq(items_, static_cast<uint32_t>(length));
   }
 
   const std::vector<std::vector<glm::dvec2>>& rings(const Region& r) {
@@ -679,20 +645,7 @@ class Builder {
     return bsp_.nodes[frag_node_[fragment]];
   }
 
-  static constexpr uint32_t kEmptyRun = UINT32_MAX - 1;
-
-  uint32_t findOrAddRun(const std::vector<uint32_t>& ids) {
-    const uint64_t h = hashRun(ids.data(), ids.size());
-    auto [lo, hi] = run_index_.equal_range(h);
-    for (auto it = lo; it != hi; ++it) {
-      const PfdRun& run = out_.runs[it->second];
-      if (run.count == ids.size() && std::equal(ids.begin(), ids.end(), out_.fragment_ids.begin() + run.first))
-        return it->second;
-    }
-    const uint32_t run_id = newRun(ids);
-    run_index_.emplace(h, run_id);
-    return run_id;
-  }
+  static constexpr uint32_t kEmptyRun = kPfdEmptyRef;
 
   // Appends list entries for `ids` (fragments and object marks; HFD: the visible ones),
   // deduplicated when asked.
@@ -725,7 +678,7 @@ class Builder {
     const std::span<const uint32_t> ids(frag_pre_.data() + fb, fe - fb);
     if (hfd() && allHidden(ids, r, root)) return;
     const uint32_t ref = objectRef(root);
-    list_fragments += refLength(ref);
+    list_fragments += store_.refLength(ref);
     out_.run_refs.push_back(ref);
   }
 
@@ -755,7 +708,7 @@ class Builder {
         facing.clear();
         for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f)
           if (bsp_.fragment_orientation[f] == o) facing.push_back(f);
-        (o > 0 ? on.front_run : on.back_run) = facing.empty() ? kPfdNoRun : findOrAddRun(facing);
+        (o > 0 ? on.front_run : on.back_run) = facing.empty() ? kPfdNoRun : store_.findOrAddRun(facing);
       }
       object.fragments += node.fragment_count;
       out_.object_nodes.push_back(on);
@@ -777,7 +730,7 @@ class Builder {
         ids, [&](int32_t root) { items.push_back(objectRef(root)); },
         [&](std::span<const uint32_t> f) {
           plain_.assign(f.begin(), f.end());
-          items.push_back(findOrAddRun(plain_));
+          items.push_back(store_.findOrAddRun(plain_));
         });
   }
 
@@ -787,8 +740,8 @@ class Builder {
     appendRefs(ids, ref_items_);
     if (ref_items_.size() == 1) return ref_items_[0];
     uint64_t length = 0;
-    for (uint32_t x : ref_items_) length += refLength(x);
-    return findOrAddSeq(ref_items_, static_cast<uint32_t>(length));
+    for (uint32_t x : ref_items_) length += store_.refLength(x);
+    return store_.findOrAddSeq(ref_items_, static_cast<uint32_t>(length));
   }
 
   void addFragments(std::span<const uint32_t> ids, const Region& r) {
@@ -802,21 +755,13 @@ class Builder {
     }
     if (v.empty()) return;
     list_fragments += v.size();
-    out_.run_refs.push_back(options_.dedup ? findOrAddRun(v) : newRun(v));
+    out_.run_refs.push_back(options_.dedup ? store_.findOrAddRun(v) : store_.newRun(v));
   }
 
   void addRunRef(uint32_t ref) {
     if (ref == kEmptyRun) return;
-    list_fragments += refLength(ref);
+    list_fragments += store_.refLength(ref);
     out_.run_refs.push_back(ref);
-  }
-
-  uint32_t newRun(const std::vector<uint32_t>& ids) {
-    const uint32_t id = static_cast<uint32_t>(out_.runs.size());
-    if (id >= kPfdObjectBit) throw PfdBudgetError("pfd: more than 2^30 runs");
-    out_.runs.push_back({static_cast<uint32_t>(out_.fragment_ids.size()), static_cast<uint32_t>(ids.size())});
-    out_.fragment_ids.insert(out_.fragment_ids.end(), ids.begin(), ids.end());
-    return id;
   }
 
  public:
@@ -1304,9 +1249,7 @@ class Builder {
   std::vector<uint32_t> memo_pool_;
   std::vector<MemoEntry> memo_entries_;
   std::unordered_multimap<uint64_t, uint32_t> memo_;
-  std::unordered_multimap<uint64_t, uint32_t> run_index_;
-  std::unordered_multimap<uint64_t, uint32_t> seq_index_;
-  std::vector<uint8_t> seq_depth_;  // per sequence: 1 + the deepest item's depth (a run: 0)
+  PfdRunStore store_{out_};  // the tree's runs and sequences, each equal one once
   std::vector<uint32_t> own_, flat_, acc_, items_, small_far_, small_near_;
   std::vector<RefFrame> ref_frames_;
   // Detail objects (PfdOptions::object_extent): per BSP node 1 at an object's root, 2 inside;

@@ -87,7 +87,7 @@ struct PfdOptions {
   uint32_t root_search_lines = 80;
   uint64_t root_search_work = 25'000'000;
   // Clip off W the slivers (narrower than 1e-9 of the region's extent) that BSP lines cut from it
-  // only because plane coefficients are rounded (pfd_build_cgal.cpp, trimSlivers): each would be
+  // only because plane coefficients are rounded (pfd_region_cgal.h, trimSlivers): each would be
   // a test for a leaf of no area. Eyes that close to a wall's plane leave the region.
   bool trim_slivers = true;
   bool dedup = true;         // store each distinct emitted run once (false: one run per emission)

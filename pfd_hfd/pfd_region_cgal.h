@@ -4,6 +4,8 @@
 // by a line, areas, and the slivers rounded plane coefficients cut off. A corner that lies on a
 // line counts as touching it, not crossing it; a double filter with a forward error bound decides
 // almost every corner sign, only the rest are evaluated exactly (docs/DESIGN.md, "Numerics").
+// Pieces are clipped by lines as Sutherland & Hodgman clip polygons [SutherlandHodgman1974]; the
+// exact numbers are CGAL's [CGAL] (docs/REFERENCES.md).
 // Internal to pfd_hfd: it includes CGAL, so only *_cgal.cpp files include it.
 #pragma once
 

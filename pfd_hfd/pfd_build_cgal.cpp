@@ -65,7 +65,7 @@ struct RefFrame {
   int32_t far_child = -1, near_child = -1;
   int s = 0;
   uint8_t stage = 0;  // 0: start; 1: far child's entry wanted; 2: near child's; 3: combine
-  uint32_t far_ref = UINT32_MAX - 1, near_ref = UINT32_MAX - 1;  // kEmptyRun
+  uint32_t far_ref = kPfdEmptyRef, near_ref = kPfdEmptyRef;
 };
 
 class Builder {

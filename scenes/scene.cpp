@@ -346,19 +346,24 @@ void placeStartEye(Scene& scene) {
   }
   std::sort(scene.levels.begin(), scene.levels.end(),
             [](const FloorLevel& a, const FloorLevel& b) { return a.floor_y < b.floor_y; });
+  const bool given = std::isfinite(scene.start_eye.x) && std::isfinite(scene.start_eye.y) &&
+                     std::isfinite(scene.start_eye.z);
   if (scene.levels.empty()) {
     const Bounds b = sceneBounds(scene);
-    if (!scene.polygons.empty() && scene.start_eye == glm::dvec3(0.0)) scene.start_eye = 0.5 * (b.lo + b.hi);
+    if (!given || (!scene.polygons.empty() && scene.start_eye == glm::dvec3(0.0)))
+      scene.start_eye = 0.5 * (b.lo + b.hi);
     return;
   }
   // Keep the loader's start if it stands above a walkable piece: choose the highest floor at or
   // below it (Doom starts stand on their sector's floor).
   const glm::dvec2 q(scene.start_eye.x, scene.start_eye.z);
   const FloorLevel* best = nullptr;
-  for (const auto& level : scene.levels) {
-    if (level.floor_y > scene.start_eye.y + 1e-9 * std::abs(scene.start_eye.y)) continue;
-    for (const auto& piece : level.walkable) {
-      if (insideConvexXz(piece, q)) best = &level;
+  if (given) {
+    for (const auto& level : scene.levels) {
+      if (level.floor_y > scene.start_eye.y + 1e-9 * std::abs(scene.start_eye.y)) continue;
+      for (const auto& piece : level.walkable) {
+        if (insideConvexXz(piece, q)) best = &level;
+      }
     }
   }
   if (best) {

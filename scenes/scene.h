@@ -178,7 +178,8 @@ void deriveFloorLevels(Scene& scene);
 void transformScene(Scene& scene, bool z_up, double scale);
 
 // Sets start_eye (and level heights) after levels exist: the centre of the largest convex piece
-// of the lowest level, at eye height, unless a loader already placed it.
+// of the lowest level, at eye height, unless a loader already placed it above a walkable piece.
+// A start that is not finite (NaN) means the source has none.
 void placeStartEye(Scene& scene);
 
 // Newell's plane of a polygon loop; n is zero when the loop has no area.

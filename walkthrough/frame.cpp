@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <fstream>
 #include <numeric>
@@ -40,20 +41,10 @@ Scene sceneFromTrees(const TreeFile& trees, const std::string& source) {
       for (const auto& piece : cell.region) fl.walkable.push_back(piece);
     scene.levels.push_back(std::move(fl));
   }
-  // No loader's start: the centre of the largest region piece, well inside where the trees answer
-  // (the origin may lie on a region's edge, in the plane of a wall, where nothing is defined).
-  scene.start_eye = glm::dvec3(0.0);
-  double best_area = 0.0;
-  for (const FloorLevel& fl : scene.levels)
-    for (const auto& piece : fl.walkable) {
-      const double area = std::abs(signedArea(piece));
-      if (piece.size() < 3 || !(area > best_area)) continue;
-      glm::dvec2 c(0.0);
-      for (const glm::dvec2& v : piece) c += v;
-      c /= static_cast<double>(piece.size());  // inside: the pieces are convex
-      best_area = area;
-      scene.start_eye = {c.x, fl.floor_y + scene.eye_height, c.y};
-    }
+  // No loader's start: placeStartEye takes the centre of a region piece, well inside where the
+  // trees answer (a made-up start such as the origin may lie on a region's edge, in the plane of a
+  // wall, where nothing is defined).
+  scene.start_eye = glm::dvec3(std::numeric_limits<double>::quiet_NaN());
   placeStartEye(scene);
   return scene;
 }

@@ -146,5 +146,43 @@ TEST(HfdStats, HfdTreeRejectsHiddenAndMissesLittle) {
   EXPECT_EQ(h.overall.pixel_error_ratio, 0.0);
 }
 
+// Eyes closer to a wall than any sensible near plane (5e-6 to 2e-5 units from the door wall of a
+// 22.6-unit scene, away from the door), with room B dropped from every list as an HFD tree would
+// drop it: the exact reference sees the wall, not room B behind it. With the near plane at 1e-6 of
+// the extent (2.3e-5) it saw through the wall and charged the lists for room B.
+TEST(HfdStats, EyeBesideAWallDoesNotSeeThroughIt) {
+  uint32_t floor_polygon;
+  Scene scene = twoRooms(floor_polygon);
+  FloorLevel& level = scene.levels[0];
+  level.walkable = {{{10 - 2e-5, 1.0}, {10 - 5e-6, 1.0}, {10 - 5e-6, 3.0}, {10 - 2e-5, 3.0}}};
+  level.walkable_area = 1.5e-5 * 2.0;
+  TreeFile file = makeTree(scene, nullptr);
+  // A fragment wholly beyond the door wall (x >= 10, not in its plane) is room B's.
+  const auto in_room_b = [&](uint32_t f) {
+    const Polygon& p = file.bsp.fragments[f];
+    bool beyond = false;
+    for (uint32_t k = 0; k < p.vertex_count; ++k) {
+      const double x = file.bsp.vertices[p.first_vertex + k].x;
+      if (!(x >= 10.0)) return false;
+      beyond = beyond || x > 10.0;
+    }
+    return beyond;
+  };
+  uint32_t other = 0;
+  while (in_room_b(other)) ++other;
+  uint64_t replaced = 0;
+  for (PfdTree& t : file.levels[0].cells)
+    for (uint32_t& f : t.fragment_ids)
+      if (in_room_b(f)) f = other, ++replaced;
+  ASSERT_GT(replaced, 10u);
+  HfdStatsOptions opt;
+  opt.views = 20;
+  opt.res = 32;
+  const HfdStats h = computeHfdStats(file, opt);
+  ASSERT_EQ(h.eyes.size(), 20u);
+  EXPECT_EQ(h.overall.missed_max, 0u);
+  EXPECT_EQ(h.overall.error_pixels, 0u);
+  for (const HfdEyeStats& e : h.eyes) EXPECT_GT(e.visible, 3u);
+}
 }  // namespace
 }  // namespace walkvis

@@ -88,8 +88,12 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
   const uint64_t n = bsp.fragments.size();
   HfdStats out;
   if (n == 0) return out;
-  // Camera depth range: everything of the model from anywhere inside it. near is far below any
-  // feature the item buffer can resolve, yet keeps single-precision depths meaningful.
+  // Camera depth range: everything of the model from anywhere inside it. The rays are exact
+  // visibility from the eye point, so near clips nothing the eye could see: region eyes stand as
+  // close to a wall as they like, and a near plane beyond the wall sees through it (1e-6 of the
+  // extent did, at eyes 0.0028 and 0.0036 units from a wall of freedoom2 MAP01, counting 133 and
+  // 55 fragments behind it as missed). 1e-9 of the extent is below the single-precision rounding
+  // of the coordinates (6e-8 of it), where the float scene cannot tell a side anyway.
   glm::dvec3 lo = bsp.vertices[0], hi = bsp.vertices[0];
   for (const auto& v : bsp.vertices) {
     lo = glm::min(lo, v);
@@ -132,7 +136,7 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
         view.eye = eye;
         view.face = face;
         view.size = options.res;
-        view.near = 1e-6 * extent;
+        view.near = 1e-9 * extent;
         view.far = 4.0 * extent;
         caster.castNearest(view, front, hits);
         e.pixels += hits.size();

@@ -267,6 +267,9 @@ struct Scratch {
   std::vector<glm::dvec2> clip;
   std::vector<glm::dvec2> target2;  // the target in its plane basis, counter-clockwise, inset
   Convex2 target_c;                 // the same, for sampling
+  // What the proof must show hidden: target2 in the sampled mode; in the conservative mode the
+  // target pulled in by the minimum gap only (see prepareTarget).
+  std::vector<glm::dvec2> proof_target;
   // Breadth first: chains are tried shortest first, and chains of one length in the order they
   // were found. Every child is one step longer than the probe it comes from, so a plain FIFO gives
   // exactly that order (a binary heap on (depth, push order) cost a fifth of an HFD build).
@@ -914,6 +917,15 @@ void VisibilityScene::Impl::Query::prepareTarget() {
     tc_ += sc_.target2.back();
   }
   tc_ /= static_cast<double>(sc_.target2.size());
+  // A conservative verdict must hold for the whole fragment: the band that the samples' shrink
+  // leaves along its edges is neither sampled nor otherwise proved, and an edge seen grazing past
+  // a blocker's top lies in it (freedoom2 MAP01, level 5: 10 pixels of a fragment the proof of
+  // the shrunk target had hidden). The minimum gap keeps the corners off the planes of the walls
+  // that meet the target there.
+  if (opt_.conservative) {
+    sc_.proof_target = sc_.target2;
+    for (auto& v : sc_.proof_target) v = pullTowards(v, tc_, 0.0, min_gap_);
+  }
   for (auto& v : sc_.target2) v = pullTowards(v, tc_, kTargetShrink, end_gap_);
   sc_.target_c.v = sc_.target2;
   sc_.target_c.centroid = tc_;
@@ -999,8 +1011,9 @@ bool VisibilityScene::Impl::Query::covers(uint32_t o, std::span<const glm::dvec2
 bool VisibilityScene::Impl::Query::proofItems(uint32_t max_items) {
   sc_.pool.clear();
   sc_.items.clear();
-  const uint32_t t_first = 0, t_count = static_cast<uint32_t>(sc_.target2.size());
-  sc_.pool.insert(sc_.pool.end(), sc_.target2.begin(), sc_.target2.end());
+  const std::vector<glm::dvec2>& pt = opt_.conservative ? sc_.proof_target : sc_.target2;
+  const uint32_t t_first = 0, t_count = static_cast<uint32_t>(pt.size());
+  sc_.pool.insert(sc_.pool.end(), pt.begin(), pt.end());
   // Only the part of each piece in front of the target (by the minimum gap) casts rays.
   const Plane& tp = shape_.plane;
   const glm::dvec2 g{tp.n.x, tp.n.z};

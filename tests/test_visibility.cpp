@@ -460,6 +460,29 @@ TEST(Visibility, ConservativeRejectsOnlyWhatIsProved) {
   EXPECT_GT(kept_unproven, 0);
 }
 
+// A wall seen only along its top edge: the occluder in front of it stops 0.0007 below the sight
+// line from the region's far edge to the wall's top, inside the band (1e-3 of the wall's size)
+// that the samples' shrink leaves unsampled. Rays there do reach the wall; the conservative mode,
+// whose proof covers the whole fragment, keeps it (a proof of the shrunk wall alone hid it).
+TEST(Visibility, ConservativeKeepsAWallSeenOnlyAlongItsEdge) {
+  Scene scene;
+  const uint32_t target = addQuad(scene, {20, 0, 0}, {20, 0, 10}, {20, 3, 10}, {20, 3, 0}, {-1, 0, 0});
+  // From x = 0 at height 1.5, the sight line to y = 2.9993 at x = 20 crosses x = 15 at this height.
+  const double h = 1.5 + (2.9993 - 1.5) * 0.75;
+  wallX(scene, 15, -10, 20, 0, h);
+  const BspTree bsp = buildBsp(scene);
+  VisibilityOptions conservative;
+  conservative.conservative = true;
+  const VisibilityScene vis = VisibilityScene::build(bsp, conservative);
+  const glm::dvec3 eye{1e-3, 1.5, 5.0}, top{20.0, 2.99995, 5.0};
+  ASSERT_FALSE(vis.occluded(eye, eye + (top - eye) * (1.0 - 1e-6)));  // the edge is seen
+  const glm::dvec3 lower{20.0, 2.998, 5.0};
+  ASSERT_TRUE(vis.occluded(eye, eye + (lower - eye) * (1.0 - 1e-6)));  // below the band it is not
+  VisibilityCounters c;
+  EXPECT_TRUE(vis.visibleFromRegion(fragmentOf(bsp, target), kRoomA, 1.5, c));
+  EXPECT_EQ(c.proved_hidden, 0u);
+}
+
 TEST(Visibility, Deterministic) {
   const Scene scene = roomGrid(5, 3);
   const BspTree bsp = buildBsp(scene);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include <glm/geometric.hpp>
 
@@ -183,6 +184,58 @@ TEST(HfdStats, EyeBesideAWallDoesNotSeeThroughIt) {
   EXPECT_EQ(h.overall.missed_max, 0u);
   EXPECT_EQ(h.overall.error_pixels, 0u);
   for (const HfdEyeStats& e : h.eyes) EXPECT_GT(e.visible, 3u);
+}
+
+// Two levels of unequal area, the small one missing the floor at every eye: the overall share of
+// eyes with a miss is the small level's share of the area, whether the eyes are split by area (the
+// default: the counts follow the areas) or the same number per level (an unweighted mean would
+// say one half).
+TEST(HfdStats, OverallFiguresWeighEyesByArea) {
+  uint32_t floor_polygon;
+  Scene scene = twoRooms(floor_polygon);
+  TreeFile file = makeTree(scene, nullptr);
+  FloorLevel strip = scene.levels[0];
+  strip.walkable = {{{0.2, 0.2}, {3.2, 0.2}, {3.2, 9.8}, {0.2, 9.8}}};
+  strip.walkable_area = 3.0 * 9.6;
+  PfdLevelOptions options;
+  options.tree.stat_eyes = 100;
+  uint64_t used = 0;
+  file.levels.push_back(buildPfdLevel(file.bsp, strip, 1, scene.eye_height, options, used));
+  uint32_t other = 0;
+  while (file.bsp.fragment_polygon[other] == floor_polygon) ++other;
+  for (PfdTree& t : file.levels[1].cells)
+    for (uint32_t& f : t.fragment_ids)
+      if (file.bsp.fragment_polygon[f] == floor_polygon) f = other;
+  double area[2] = {0.0, 0.0};
+  for (int l = 0; l < 2; ++l)
+    for (const PfdTree& t : file.levels[l].cells) area[l] += t.stats.region_area;
+  ASSERT_GT(area[0], 2.0 * area[1]);
+  const double share = area[1] / (area[0] + area[1]);
+
+  HfdStatsOptions opt;
+  opt.views = 30;
+  opt.res = 16;
+  for (const bool per_level : {false, true}) {
+    SCOPED_TRACE(per_level ? "per level" : "by area");
+    opt.per_level = per_level;
+    const HfdStats h = computeHfdStats(file, opt);
+    ASSERT_EQ(h.levels.size(), 2u);
+    for (int l = 0; l < 2; ++l) {
+      const uint32_t want = per_level ? 30u
+                                      : std::max(kMinLevelEyes, static_cast<uint32_t>(std::llround(
+                                                                    60.0 * area[l] / (area[0] + area[1]))));
+      EXPECT_EQ(h.levels[l].summary.eyes, want);
+    }
+    EXPECT_EQ(h.levels[0].summary.eyes_with_miss, 0.0);
+    EXPECT_EQ(h.levels[1].summary.eyes_with_miss, 1.0);
+    EXPECT_NEAR(h.overall.eyes_with_miss, share, 1e-12);
+    const double listed = (1.0 - share) * h.levels[0].summary.listed_mean + share * h.levels[1].summary.listed_mean;
+    EXPECT_NEAR(h.overall.listed_mean, listed, 1e-9 * listed);
+    EXPECT_EQ(h.overall.missed_histogram[0], h.levels[0].summary.eyes);  // histograms count eyes
+    double weights = 0.0;
+    for (const HfdEyeStats& e : h.eyes) weights += e.weight;
+    EXPECT_NEAR(weights, static_cast<double>(h.eyes.size()), 1e-9 * h.eyes.size());
+  }
 }
 }  // namespace
 }  // namespace walkvis

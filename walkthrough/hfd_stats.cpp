@@ -32,31 +32,22 @@ size_t pixelErrorBin(double ratio) {
   return 6;
 }
 
-void finish(HfdSummary& s, double listed_sum, double visible_sum, double missed_sum, double rejection_sum,
-            double over_sum, uint64_t over_eyes, double tests_sum, uint64_t eyes_missing) {
-  if (s.eyes == 0) return;
-  const double n = static_cast<double>(s.eyes);
-  s.listed_mean = listed_sum / n;
-  s.visible_mean = visible_sum / n;
-  s.missed_mean = missed_sum / n;
-  s.rejection_ratio = rejection_sum / n;
-  s.overestimation = over_eyes ? over_sum / static_cast<double>(over_eyes) : 0.0;
-  s.tests_mean = tests_sum / n;
-  s.eyes_with_miss = static_cast<double>(eyes_missing) / n;
-  s.pixel_error_ratio = s.pixels ? static_cast<double>(s.error_pixels) / static_cast<double>(s.pixels) : 0.0;
-}
-
+// Weighted means over eyes (walkthrough/hfd_stats.h: the weights are equal within a level).
 HfdSummary summarise(std::span<const HfdEyeStats> eyes, uint64_t fragments) {
   HfdSummary s;
   s.fragments = fragments;
-  double listed = 0, visible = 0, missed = 0, rejection = 0, over = 0, tests = 0;
-  uint64_t over_eyes = 0, missing = 0;
+  double w_sum = 0, listed = 0, visible = 0, missed = 0, rejection = 0, tests = 0, missing = 0;
+  double over = 0, over_w = 0, error_px = 0, px = 0;
   for (const HfdEyeStats& e : eyes) {
+    const double w = e.weight;
     ++s.eyes;
-    listed += e.listed;
-    visible += e.visible;
-    missed += e.missed;
-    tests += e.tests;
+    w_sum += w;
+    listed += w * e.listed;
+    visible += w * e.visible;
+    missed += w * e.missed;
+    tests += w * e.tests;
+    error_px += w * static_cast<double>(e.error_pixels);
+    px += w * static_cast<double>(e.pixels);
     s.listed_max = std::max(s.listed_max, e.listed);
     s.visible_max = std::max(s.visible_max, e.visible);
     s.missed_max = std::max(s.missed_max, e.missed);
@@ -66,15 +57,49 @@ HfdSummary summarise(std::span<const HfdEyeStats> eyes, uint64_t fragments) {
     s.pixel_error_ratio_max = std::max(s.pixel_error_ratio_max, ratio);
     ++s.missed_histogram[missedBin(e.missed)];
     ++s.pixel_error_histogram[pixelErrorBin(ratio)];
-    if (fragments) rejection += 1.0 - static_cast<double>(e.listed) / static_cast<double>(fragments);
+    if (fragments) rejection += w * (1.0 - static_cast<double>(e.listed) / static_cast<double>(fragments));
     if (e.visible) {
-      over += static_cast<double>(e.listed) / e.visible;
-      ++over_eyes;
+      over += w * static_cast<double>(e.listed) / e.visible;
+      over_w += w;
     }
-    if (e.missed) ++missing;
+    if (e.missed) missing += w;
   }
-  finish(s, listed, visible, missed, rejection, over, over_eyes, tests, missing);
+  if (!(w_sum > 0.0)) return s;
+  s.listed_mean = listed / w_sum;
+  s.visible_mean = visible / w_sum;
+  s.missed_mean = missed / w_sum;
+  s.rejection_ratio = rejection / w_sum;
+  s.overestimation = over_w > 0.0 ? over / over_w : 0.0;
+  s.tests_mean = tests / w_sum;
+  s.eyes_with_miss = missing / w_sum;
+  s.pixel_error_ratio = px > 0.0 ? error_px / px : 0.0;
   return s;
+}
+
+double levelArea(const PfdLevel& level) {
+  double a = 0.0;
+  for (const PfdTree& t : level.cells) a += std::max(t.stats.region_area, 0.0);
+  return a;
+}
+
+// Eyes per level (hfd_stats.h, HfdStatsOptions::per_level).
+std::vector<uint32_t> eyesPerLevel(const TreeFile& file, const HfdStatsOptions& options) {
+  std::vector<double> area;
+  double total = 0.0;
+  uint32_t with_area = 0;
+  for (const PfdLevel& level : file.levels) {
+    area.push_back(levelArea(level));
+    total += area.back();
+    with_area += area.back() > 0.0;
+  }
+  std::vector<uint32_t> n(file.levels.size(), 0);
+  const double all = static_cast<double>(options.views) * with_area;
+  const uint32_t least = std::min(options.views, kMinLevelEyes);
+  for (size_t l = 0; l < n.size(); ++l)
+    if (area[l] > 0.0)
+      n[l] = options.per_level ? options.views
+                               : std::max(least, static_cast<uint32_t>(std::llround(all * area[l] / total)));
+  return n;
 }
 
 }  // namespace
@@ -106,10 +131,12 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
   std::vector<uint32_t> listed_stamp(n, 0), visible_stamp(n, 0);
   uint32_t stamp = 0;
   uint64_t rng = options.seed ^ 0x5DEECE66Dull;
+  const std::vector<uint32_t> wanted = eyesPerLevel(file, options);
+  std::vector<size_t> first_eye(file.levels.size() + 1, 0);
   for (size_t li = 0; li < file.levels.size(); ++li) {
     const PfdLevel& level = file.levels[li];
-    const size_t first_eye = out.eyes.size();
-    for (uint32_t k = 0; k < options.views; ++k) {
+    first_eye[li] = out.eyes.size();
+    for (uint32_t k = 0; k < wanted[li]; ++k) {
       const std::optional<glm::dvec3> sampled = samplePfdLevel(level, rng);
       if (!sampled) break;  // no region area on this level
       const glm::dvec3 eye = *sampled;
@@ -151,16 +178,28 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
         }
       }
       out.eyes.push_back(e);
-      if (progress && ((k + 1) % 50 == 0 || k + 1 == options.views)) {
+      if (progress && ((k + 1) % 50 == 0 || k + 1 == wanted[li])) {
         char line[160];
-        std::snprintf(line, sizeof line, "stats: level %u: %u/%u eyes", level.level, k + 1, options.views);
+        std::snprintf(line, sizeof line, "stats: level %u: %u/%u eyes", level.level, k + 1, wanted[li]);
         progress(line);
       }
     }
+  }
+  first_eye.back() = out.eyes.size();
+  // Weights from the eyes each level got (an eye on no cell's box is dropped), so that the overall
+  // figures are area-weighted whatever the split.
+  double area_total = 0.0;
+  for (const PfdLevel& level : file.levels) area_total += levelArea(level);
+  const double eyes_total = static_cast<double>(out.eyes.size());
+  for (size_t li = 0; li < file.levels.size(); ++li) {
+    const size_t count = first_eye[li + 1] - first_eye[li];
+    const double weight = count ? (levelArea(file.levels[li]) / area_total) / (count / eyes_total) : 0.0;
+    for (size_t k = first_eye[li]; k < first_eye[li + 1]; ++k) out.eyes[k].weight = weight;
     HfdLevelSummary ls;
-    ls.level = level.level;
-    ls.height = level.height;
-    ls.summary = summarise(std::span<const HfdEyeStats>(out.eyes).subspan(first_eye), n);
+    ls.level = file.levels[li].level;
+    ls.height = file.levels[li].height;
+    // One weight for the whole level cancels: its figures are plain means.
+    ls.summary = summarise(std::span<const HfdEyeStats>(out.eyes).subspan(first_eye[li], count), n);
     out.levels.push_back(ls);
   }
   out.overall = summarise(out.eyes, n);

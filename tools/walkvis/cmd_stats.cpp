@@ -1,14 +1,16 @@
-// walkvis stats FILE [--views N] [--res PIXELS] [--seed S] [--json] [--csv FILE]: hidden-polygon
+// walkvis stats FILE [--views N] [--per-level] [--res PIXELS] [--seed S] [--json] [--csv FILE]: hidden-polygon
 // rejection statistics of a tree file (walkthrough/hfd_stats.h; docs/DESIGN.md, "Hidden-polygon
 // statistics"): per level and overall, listed / visible / missed fragments, pixel_error_ratio,
 // rejection ratio and overestimation with means, maxima and histograms. Progress goes to stderr.
 #include <cstdio>
-#include <fstream>
+#include <span>
+#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "core/byte_io.h"
 #include "pfd_hfd/pfd.h"
 #include "walkthrough/hfd_stats.h"
 
@@ -71,14 +73,14 @@ int runStats(const StatsArgs& args) {
     std::fprintf(stderr, "%s\n", line.c_str());
   });
   if (!args.csv.empty()) {
-    std::ofstream csv(args.csv);
-    if (!csv) throw Error(args.csv + ": cannot write");
-    csv << "level,x,y,z,listed,visible,missed,error_pixels,pixels,tests\n";
+    std::ostringstream csv;
+    csv << "level,x,y,z,listed,visible,missed,error_pixels,pixels,tests,weight\n";
     csv.precision(17);
     for (const HfdEyeStats& e : stats.eyes)
       csv << e.level << ',' << e.eye.x << ',' << e.eye.y << ',' << e.eye.z << ',' << e.listed << ',' << e.visible
-          << ',' << e.missed << ',' << e.error_pixels << ',' << e.pixels << ',' << e.tests << '\n';
-    if (!csv) throw Error(args.csv + ": write failed");
+          << ',' << e.missed << ',' << e.error_pixels << ',' << e.pixels << ',' << e.tests << ',' << e.weight << '\n';
+    const std::string text = csv.str();
+    writeFileAtomically(args.csv, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), "the eye table");
   }
   if (args.json) {
     nlohmann::ordered_json j;
@@ -88,6 +90,7 @@ int runStats(const StatsArgs& args) {
     j["polygon_samples"] = file.visibility.polygon_samples;
     j["refine_rays"] = file.visibility.refine_rays;
     j["views"] = args.options.views;
+    j["eyes_split"] = args.options.per_level ? "per_level" : "by_area";
     j["res"] = args.options.res;
     j["seed"] = args.options.seed;
     j["seconds"] = stats.seconds;
@@ -108,8 +111,10 @@ int runStats(const StatsArgs& args) {
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
-  std::printf("%s: %s tree, %d px cube faces, %u eyes per level, %.1f s\n", args.file.c_str(),
-              treeKindName(file.kind), args.options.res, args.options.views, stats.seconds);
+  std::printf("%s: %s tree, %d px cube faces, %llu eyes (%s), overall figures weighted by area, %.1f s\n",
+              args.file.c_str(), treeKindName(file.kind), args.options.res,
+              static_cast<unsigned long long>(stats.overall.eyes),
+              args.options.per_level ? "the same number per level" : "split among levels by area", stats.seconds);
   for (const HfdLevelSummary& l : stats.levels) {
     char name[32];
     std::snprintf(name, sizeof name, "level %u", l.level);
@@ -126,7 +131,13 @@ void addStatsCommand(CLI::App& app, CommandRunner& runner) {
   CLI::App* sub = app.add_subcommand("stats", "Hidden-polygon rejection statistics of a tree file against exact "
                                               "360-degree item buffers");
   sub->add_option("file", args->file, "Tree file (walkvis build --tree pfd|hfd)")->required();
-  sub->add_option("--views", args->options.views, "Random eyes per level")->check(CLI::Range(1u, 1000000u));
+  sub->add_option("--views", args->options.views,
+                  "Random eyes per level on average (split among levels by area, at least " +
+                      std::to_string(kMinLevelEyes) + " each)")
+      ->check(CLI::Range(1u, 1000000u));
+  sub->add_flag("--per-level", args->options.per_level,
+                "The same number of eyes (--views) on every level instead of a split by area (the overall figures "
+                "stay area-weighted)");
   sub->add_option("--res", args->options.res, "Pixels per side of each of the six cube faces")
       ->check(CLI::Range(1, 8192));
   sub->add_option("--seed", args->options.seed, "Seed of the eyes");

@@ -4,9 +4,10 @@
 //                   [--views N] [--res PIXELS] [--max-levels K] [--max-seconds S] [--csv FILE] [--png FILE]
 //     Sweeps the HFD sampling knobs: per point the HFD trees of the scene's levels are built
 //     (buildPfdLevel with a VisibilityScene) and measured with computeHfdStats: build seconds, rays
-//     cast, ray rate, tree bytes, mean listed, pixel_error_ratio, missed fragments. Writes a CSV
-//     and a speed-against-error plot (PNG: build seconds across, log10 pixel error up, each point
-//     numbered by its CSV row).
+//     cast, ray rate, tree bytes, mean listed, pixel_error_ratio, missed fragments, eyes with a
+//     miss. Writes a CSV and a speed-against-error plot (PNG: build seconds across; up, log10 pixel
+//     error in the top panel and log10 of the share of eyes with a miss below; each point numbered
+//     by its CSV row).
 //   bench rays SCENE [--rays N]
 //     Occlusion-ray throughput of the same Embree scene (VisibilityScene::occluded): random
 //     incoherent segments from walkable points at eye height to points of random fragments, on 1
@@ -178,42 +179,51 @@ struct Canvas {
   }
 };
 
-void drawPlot(const std::vector<HfdPoint>& points, const std::string& path) {
-  Canvas cv(640, 480);
-  const int x0 = 60, y0 = 430, x1 = 620, y1 = 20;  // plot area: (x0, y0) bottom left
+// One panel of the plot: build seconds across, log10 of `value` up from `emin` (0 is drawn at
+// the floor) to 0, each point labelled with its row number.
+void drawPanel(Canvas& cv, const std::vector<HfdPoint>& points, int y_top, int y_bottom, int emin,
+               double (*value)(const HfdPoint&)) {
+  const int x0 = 60, x1 = 620;
   double smax = 0.0;
   for (const auto& p : points) smax = std::max(smax, p.build_seconds);
   smax = smax > 0.0 ? smax * 1.05 : 1.0;
-  const double emin = -7.0, emax = 0.0;  // log10 pixel error; 0 error is drawn at the floor
-  auto ey = [&](double e) {
-    const double l = std::clamp(e > 0.0 ? std::log10(e) : emin, emin, emax);
-    return static_cast<int>(y0 - (l - emin) / (emax - emin) * (y0 - y1));
+  const auto ey = [&](double e) {
+    const double l = std::clamp(e > 0.0 ? std::log10(e) : emin, static_cast<double>(emin), 0.0);
+    return static_cast<int>(y_bottom - (l - emin) / -emin * (y_bottom - y_top));
   };
-  for (int x = x0; x <= x1; ++x) cv.set(x, y0, {0, 0, 0});
-  for (int y = y1; y <= y0; ++y) cv.set(x0, y, {0, 0, 0});
-  for (int k = 0; k <= 7; ++k) {
-    const int y = static_cast<int>(y0 - k / 7.0 * (y0 - y1));
+  for (int x = x0; x <= x1; ++x) cv.set(x, y_bottom, {0, 0, 0});
+  for (int y = y_top; y <= y_bottom; ++y) cv.set(x0, y, {0, 0, 0});
+  for (int k = 0; k <= -emin; ++k) {
+    const int y = static_cast<int>(y_bottom - static_cast<double>(k) / -emin * (y_bottom - y_top));
     for (int x = x0 - 4; x < x0; ++x) cv.set(x, y, {0, 0, 0});
     for (int x = x0 + 1; x <= x1; x += 4) cv.set(x, y, {200, 200, 200});
-    cv.text(x0 - 40, y - 3, "1e" + std::to_string(k - 7));
+    cv.text(x0 - 40, y - 3, "1e" + std::to_string(k + emin));
   }
   for (int k = 0; k <= 4; ++k) {
     const int x = static_cast<int>(x0 + k / 4.0 * (x1 - x0));
-    for (int y = y0; y < y0 + 4; ++y) cv.set(x, y, {0, 0, 0});
+    for (int y = y_bottom; y < y_bottom + 4; ++y) cv.set(x, y, {0, 0, 0});
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.3g", smax * k / 4.0);
-    cv.text(x - 10, y0 + 8, buf);
+    cv.text(x - 10, y_bottom + 8, buf);
   }
-  cv.text(x1 - 30, y0 + 24, "s");
+  cv.text(x1 - 30, y_bottom + 24, "s");
   for (size_t i = 0; i < points.size(); ++i) {
     const int px = static_cast<int>(x0 + points[i].build_seconds / smax * (x1 - x0));
-    const int py = ey(points[i].stats.pixel_error_ratio);
+    const int py = ey(value(points[i]));
     const std::array<uint8_t, 3> c = points[i].vis.refine_rays ? std::array<uint8_t, 3>{200, 30, 30}
                                                                 : std::array<uint8_t, 3>{30, 30, 200};
     for (int dy = -2; dy <= 2; ++dy)
       for (int dx = -2; dx <= 2; ++dx) cv.set(px + dx, py + dy, c);
     cv.text(px + 4, py - 10, std::to_string(i + 1), c);
   }
+}
+
+// Top: pixel error ratio (1e-7 to 1); bottom: the share of eyes with a miss (1e-4 to 1), which
+// average pixel error hides. Both against build seconds.
+void drawPlot(const std::vector<HfdPoint>& points, const std::string& path) {
+  Canvas cv(640, 900);
+  drawPanel(cv, points, 20, 430, -7, [](const HfdPoint& p) { return p.stats.pixel_error_ratio; });
+  drawPanel(cv, points, 490, 850, -4, [](const HfdPoint& p) { return p.stats.eyes_with_miss; });
   writePngRgb(path, cv.w, cv.h, cv.rgb);
 }
 

@@ -818,6 +818,8 @@ class VisibilityScene::Impl::Query {
 
   const Impl& s_;
   const VisibilityOptions& opt_;
+  // Only a proof may reject: the conservative mode, or a region too large for sampled verdicts.
+  bool strict_ = false;
   const Target& shape_;
   std::span<const std::vector<glm::dvec2>> region_;
   const double height_;
@@ -845,11 +847,12 @@ bool VisibilityScene::Impl::Query::run(glm::dvec2* witness) {
   rng_ = seed();
   preparePieces();
   if (sc_.pieces.empty()) return false;
+  strict_ = opt_.conservative || sc_.region_area > opt_.sampled_max_area;
   prepareTarget();
   sampleEyes();
   sampleTargets();
   if (uniformPackets(1)) return visibleWith(witness, clear_eye_);
-  if (opt_.proof_rays > 0 || opt_.conservative) {
+  if (opt_.proof_rays > 0 || strict_) {
     const uint64_t rays_before = counters_.rays;
     const int proof = proveHidden();
     counters_.proof_rays += counters_.rays - rays_before;
@@ -859,7 +862,7 @@ bool VisibilityScene::Impl::Query::run(glm::dvec2* witness) {
       return false;
     }
   }
-  if (opt_.conservative) {
+  if (strict_) {
     // Not proved hidden: kept, whatever further sampling would say.
     ++counters_.visible;
     ++counters_.kept_unproven;
@@ -922,7 +925,7 @@ void VisibilityScene::Impl::Query::prepareTarget() {
   // a blocker's top lies in it (freedoom2 MAP01, level 5: 10 pixels of a fragment the proof of
   // the shrunk target had hidden). The minimum gap keeps the corners off the planes of the walls
   // that meet the target there.
-  if (opt_.conservative) {
+  if (strict_) {
     sc_.proof_target = sc_.target2;
     for (auto& v : sc_.proof_target) v = pullTowards(v, tc_, 0.0, min_gap_);
   }
@@ -1011,7 +1014,7 @@ bool VisibilityScene::Impl::Query::covers(uint32_t o, std::span<const glm::dvec2
 bool VisibilityScene::Impl::Query::proofItems(uint32_t max_items) {
   sc_.pool.clear();
   sc_.items.clear();
-  const std::vector<glm::dvec2>& pt = opt_.conservative ? sc_.proof_target : sc_.target2;
+  const std::vector<glm::dvec2>& pt = strict_ ? sc_.proof_target : sc_.target2;
   const uint32_t t_first = 0, t_count = static_cast<uint32_t>(pt.size());
   sc_.pool.insert(sc_.pool.end(), pt.begin(), pt.end());
   // Only the part of each piece in front of the target (by the minimum gap) casts rays.
@@ -1079,7 +1082,7 @@ bool VisibilityScene::Impl::Query::halve(uint32_t first, uint32_t count, uint32_
 // 1 proved hidden, 2 a ray was unblocked (visible, clear_eye_ its eye), 0 neither.
 int VisibilityScene::Impl::Query::proveHidden() {
   const uint32_t max_items =
-      opt_.conservative ? std::max(opt_.proof_rays, opt_.conservative_proof_rays) : opt_.proof_rays;
+      strict_ ? std::max(opt_.proof_rays, opt_.conservative_proof_rays) : opt_.proof_rays;
   if (!proofItems(max_items)) return 0;
   uint32_t budget = max_items;
   while (!sc_.items.empty()) {

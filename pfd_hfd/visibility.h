@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -54,6 +55,10 @@ struct VisibilityOptions {
   // Not stored in tree files.
   bool conservative = false;
   uint32_t conservative_proof_rays = 256;
+  // Sampled verdicts are taken only from regions of at most this area; a test from a larger one
+  // is conservative (sampling a large region thinly is where misses come from). Not stored in
+  // tree files.
+  double sampled_max_area = std::numeric_limits<double>::infinity();
 };
 
 struct VisibilityCounters {

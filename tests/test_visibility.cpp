@@ -483,6 +483,43 @@ TEST(Visibility, ConservativeKeepsAWallSeenOnlyAlongItsEdge) {
   EXPECT_EQ(c.proved_hidden, 0u);
 }
 
+// sampled_max_area: a test from a region larger than it answers as the conservative mode does,
+// one from a smaller region as the sampled mode does, verdict and counters alike.
+TEST(Visibility, SampledVerdictsOnlyFromSmallRegions) {
+  int large = 0, small = 0, differ = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const Scene scene = roomGrid(seed, 3);
+    const BspTree bsp = buildBsp(scene);
+    VisibilityOptions sampled, conservative, hybrid;
+    sampled.seed = conservative.seed = hybrid.seed = seed;
+    conservative.conservative = true;
+    hybrid.sampled_max_area = 60.0;
+    const VisibilityScene vs = VisibilityScene::build(bsp, sampled);
+    const VisibilityScene vc = VisibilityScene::build(bsp, conservative);
+    const VisibilityScene vh = VisibilityScene::build(bsp, hybrid);
+    std::mt19937_64 rng(seed * 31);
+    forRandomBoxFragments(rng, 30, 10, bsp.fragments.size(), [&](const Box& box, uint32_t f) {
+      const auto [x0, x1, z0, z1] = box.bounds;
+      const bool is_large = (x1 - x0) * (z1 - z0) > hybrid.sampled_max_area;
+      VisibilityCounters ch, cr;
+      const bool h = vh.visibleFromRegion(f, box.region, 1.5, ch);
+      const bool r = (is_large ? vc : vs).visibleFromRegion(f, box.region, 1.5, cr);
+      EXPECT_EQ(h, r) << "seed " << seed << " fragment " << f << (is_large ? " large" : " small");
+      EXPECT_EQ(ch.rays, cr.rays);
+      EXPECT_EQ(ch.proved_hidden, cr.proved_hidden);
+      EXPECT_EQ(ch.kept_unproven, cr.kept_unproven);
+      ++(is_large ? large : small);
+      if (is_large) {
+        VisibilityCounters cs;
+        differ += vs.visibleFromRegion(f, box.region, 1.5, cs) != h;
+      }
+    });
+  }
+  EXPECT_GT(large, 50);
+  EXPECT_GT(small, 50);
+  EXPECT_GT(differ, 0);  // the large regions' answers are not the sampled mode's anyway
+}
+
 TEST(Visibility, Deterministic) {
   const Scene scene = roomGrid(5, 3);
   const BspTree bsp = buildBsp(scene);

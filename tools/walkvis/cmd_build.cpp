@@ -42,6 +42,7 @@ struct BuildArgs {
   bool keep_back_faces = false;
   bool no_fuse_occluders = false;
   std::string visibility_mode = "sampled";
+  double sampled_region_max = 0.0;
   bool no_dedup = false;
   bool no_object_boxes = false;
   uint32_t share_min = PfdOptions{}.share_min;
@@ -190,6 +191,10 @@ int runBuild(const BuildArgs& args) {
     std::fflush(stderr);
   };
   const Scene scene = loadScene(args.scene.scene, args.scene.loadOptions());
+  if (args.sampled_region_max > 0.0) {
+    const double side = args.sampled_region_max * scene.eye_height;
+    vis_options.sampled_max_area = side * side;
+  }
   progress("loaded " + scene.name + ": " + std::to_string(scene.polygons.size()) + " polygons, " +
            std::to_string(scene.levels.size()) + " levels");
   std::vector<uint32_t> only = args.levels;
@@ -252,6 +257,7 @@ int runBuild(const BuildArgs& args) {
                     {"seed", vis_options.seed}};
     j["fuse_occluders"] = vis_options.fuse_occluders;
     j["visibility_mode"] = args.visibility_mode;
+    j["sampled_region_max"] = args.sampled_region_max;
     j["visibility_scene_seconds"] = visibility_seconds;
   }
   j["trees_seconds"] = trees_seconds;
@@ -403,6 +409,10 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("--visibility", args->visibility_mode,
                   "hfd: sampled (reject what no sampled ray sees) or conservative (reject only what is proved hidden)")
       ->check(CLI::IsMember({"sampled", "conservative"}));
+  sub->add_option("--sampled-region-max", args->sampled_region_max,
+                  "hfd, sampled: take sampled verdicts only from regions of at most this area, as the side of a square in "
+                  "eye heights; larger regions reject only what is proved hidden (0: any region)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-fuse-occluders", args->no_fuse_occluders,
                 "hfd: the hiddenness proof uses single blockers only, never patches of joined ones (for comparison)");
   sub->add_flag("--keep-back-faces", args->keep_back_faces,

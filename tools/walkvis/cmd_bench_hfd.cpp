@@ -5,9 +5,9 @@
 //     Sweeps the HFD sampling knobs: per point the HFD trees of the scene's levels are built
 //     (buildPfdLevel with a VisibilityScene) and measured with computeHfdStats: build seconds, rays
 //     cast, ray rate, tree bytes, mean listed, pixel_error_ratio, missed fragments, eyes with a
-//     miss. Writes a CSV and a speed-against-error plot (PNG: build seconds across; up, log10 pixel
-//     error in the top panel and log10 of the share of eyes with a miss below; each point numbered
-//     by its CSV row).
+//     miss, the histogram of per-eye pixel error. Writes a CSV (through a temporary file) and a
+//     speed-against-error plot (PNG: build seconds across; up, log10 pixel error in the top panel
+//     and log10 of the share of eyes with a miss below; each point numbered by its CSV row).
 //   bench rays SCENE [--rays N]
 //     Occlusion-ray throughput of the same Embree scene (VisibilityScene::occluded): random
 //     incoherent segments from walkable points at eye height to points of random fragments, on 1
@@ -17,7 +17,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <span>
+#include <sstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -27,6 +28,7 @@
 
 #include "bsp/bsp.h"
 #include "commands.h"
+#include "core/byte_io.h"
 #include "core/rng.h"
 #include "core/sample.h"
 #include "pfd_hfd/pfd.h"
@@ -295,11 +297,13 @@ int runHfdBench(const HfdBenchArgs& args) {
                      100.0 * pt.stats.eyes_with_miss);
         points.push_back(pt);
       }
-  std::ofstream csv(args.csv);
-  if (!csv) throw Error(args.csv + ": cannot write");
+  std::ostringstream csv;
   csv << "point,scene,region_samples,polygon_samples,refine_rays,proof_rays,threads,build_seconds,vis_tests,rays,"
          "rays_per_second,ray_rate_fraction_1thread,ray_rate_fraction_2threads,rejected,tree_bytes,listed_mean,visible_mean,missed_mean,missed_max,"
-         "eyes_with_miss,pixel_error_ratio,pixel_error_ratio_max,rejection_ratio,overestimation,eyes,res\n";
+         "eyes_with_miss,pixel_error_ratio,pixel_error_ratio_max,rejection_ratio,overestimation,eyes,res";
+  // The histogram of per-eye pixel error (hfd_stats.h, kPixelErrorBins), as eye counts.
+  for (const char* bin : {"0", "1e-6", "1e-5", "1e-4", "1e-3", "1e-2", "over_1e-2"}) csv << ",eyes_error_" << bin;
+  csv << '\n';
   std::printf("%s: %zu fragments, %u levels; Embree occlusion rays/s: %.3g (1 thread), %.3g (2 threads)\n",
               scene.name.c_str(), bsp.fragments.size(), levels, rate.rays_per_second_1, rate.rays_per_second_2);
   std::printf("%3s %6s %6s %6s %5s %9s %11s %8s %8s %11s %9s %10s %9s %6s %6s\n", "pt", "region", "poly", "refine",
@@ -313,7 +317,9 @@ int runHfdBench(const HfdBenchArgs& args) {
         << rps / rate.rays_per_second_2 << ',' << p.rejected << ',' << p.bytes << ',' << p.stats.listed_mean << ','
         << p.stats.visible_mean << ',' << p.stats.missed_mean << ',' << p.stats.missed_max << ','
         << p.stats.eyes_with_miss << ',' << p.stats.pixel_error_ratio << ',' << p.stats.pixel_error_ratio_max << ','
-        << p.stats.rejection_ratio << ',' << p.stats.overestimation << ',' << p.stats.eyes << ',' << args.res << '\n';
+        << p.stats.rejection_ratio << ',' << p.stats.overestimation << ',' << p.stats.eyes << ',' << args.res;
+    for (uint64_t n : p.stats.pixel_error_histogram) csv << ',' << n;
+    csv << '\n';
     std::printf("%3zu %6u %6u %6u %5u %9.2f %11llu %7.1f%% %7.1f%% %11llu %9.1f %10.3g %9.3f %5.1f%% %6.2f\n", i + 1,
                 p.vis.region_samples, p.vis.polygon_samples, p.vis.refine_rays, p.vis.proof_rays, p.build_seconds,
                 static_cast<unsigned long long>(p.rays), 100.0 * rps / rate.rays_per_second_1,
@@ -321,7 +327,8 @@ int runHfdBench(const HfdBenchArgs& args) {
                 static_cast<unsigned long long>(p.bytes), p.stats.listed_mean, p.stats.pixel_error_ratio,
                 p.stats.missed_mean, 100.0 * p.stats.eyes_with_miss, p.stats.overestimation);
   }
-  if (!csv) throw Error(args.csv + ": write failed");
+  const std::string text = csv.str();
+  writeFileAtomically(args.csv, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), "the sweep table");
   if (!args.png.empty() && !points.empty()) drawPlot(points, args.png);
   if (stopped) std::printf("(stopped after %.0f s: --max-seconds; later points skipped)\n", args.max_seconds);
   std::printf("wrote %s, %s\n", args.csv.c_str(), args.png.c_str());

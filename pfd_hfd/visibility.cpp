@@ -849,6 +849,7 @@ bool VisibilityScene::Impl::Query::run(glm::dvec2* witness) {
   if (sc_.pieces.empty()) return false;
   strict_ = opt_.conservative || sc_.region_area > opt_.sampled_max_area;
   prepareTarget();
+  if (sc_.target2.size() < 3) return false;  // collapsed to a segment: seen edge-on at most
   sampleEyes();
   sampleTargets();
   if (uniformPackets(1)) return visibleWith(witness, clear_eye_);
@@ -914,11 +915,22 @@ void VisibilityScene::Impl::Query::prepareTarget() {
   tbase_ = tp.n * tp.d;
   sc_.target2.clear();
   tc_ = glm::dvec2(0.0);
+  // Corners nearer than the minimum gap to the previous one are dropped. BSP splits through a
+  // vertex leave such near-duplicates (freedoom1 E1M1: a floor triangle of five corners, two
+  // 1e-13 apart from their neighbours), and the direction of an edge that short is rounding
+  // noise: taken for a side of the target, its line cut through the middle, so rayEnd found
+  // every sample on its outside, cast no ray, and the floor beside the eye was never seen (15.7%
+  // of one eye's pixels). The target changes by less than the gap, which the single-precision
+  // scene cannot resolve and the conservative proof target is pulled in by.
   for (const glm::dvec3& corner : shape_.vertices) {
     const glm::dvec3 v = corner - tbase_;
-    sc_.target2.push_back({glm::dot(v, tu_), glm::dot(v, tw_)});
-    tc_ += sc_.target2.back();
+    const glm::dvec2 q{glm::dot(v, tu_), glm::dot(v, tw_)};
+    if (!sc_.target2.empty() && glm::length(q - sc_.target2.back()) <= min_gap_) continue;
+    sc_.target2.push_back(q);
   }
+  while (sc_.target2.size() > 1 && glm::length(sc_.target2.back() - sc_.target2.front()) <= min_gap_)
+    sc_.target2.pop_back();
+  for (const auto& q : sc_.target2) tc_ += q;
   tc_ /= static_cast<double>(sc_.target2.size());
   // A conservative verdict must hold for the whole fragment: the band that the samples' shrink
   // leaves along its edges is neither sampled nor otherwise proved, and an edge seen grazing past
@@ -1038,7 +1050,10 @@ bool VisibilityScene::Impl::Query::proofItems(uint32_t max_items) {
     for (size_t k = 0; k < sc_.poly.size(); ++k) {
       const glm::dvec2 a = sc_.poly[k], ab = sc_.poly[(k + 1) % sc_.poly.size()] - a;
       const double len = glm::length(ab);
-      if (!(len > 0.0)) continue;
+      // The direction of an edge shorter than the minimum gap is rounding noise (see
+      // prepareTarget): shrinking along it could cut the piece anywhere. Left unshrunk, the piece
+      // only stays larger there, by less than the gap.
+      if (!(len > min_gap_)) continue;
       const glm::dvec2 inward = glm::dvec2(-ab.y, ab.x) / len;
       if (!clipHalfPlane(sc_.clip, inward, -glm::dot(inward, a) - 4.0 * min_gap_, sc_.poly2)) return false;
       sc_.clip.swap(sc_.poly2);

@@ -370,9 +370,14 @@ const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye) {
   return nullptr;
 }
 
-std::optional<glm::dvec3> samplePfdLevel(const PfdLevel& level, uint64_t& rng_state) {
+double pfdLevelArea(const PfdLevel& level) {
   double total = 0.0;
   for (const PfdTree& t : level.cells) total += std::max(t.stats.region_area, 0.0);
+  return total;
+}
+
+std::optional<glm::dvec3> samplePfdLevel(const PfdLevel& level, uint64_t& rng_state) {
+  const double total = pfdLevelArea(level);
   if (!(total > 0.0)) return std::nullopt;
   double pick = uniform01(rng_state) * total;
   size_t c = 0, last = 0;

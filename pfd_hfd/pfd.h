@@ -407,6 +407,9 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
 // half-open boxes [lo, hi)).
 const PfdTree* findPfdCell(const PfdLevel& level, const glm::dvec3& eye);
 
+// The level's region area: the sum over its cells (negative areas, never made, count as 0).
+double pfdLevelArea(const PfdLevel& level);
+
 // A uniformly random eye of the level (a cell by region area, then a point of its region) at the
 // level's height, or nullopt when the level has no region area.
 std::optional<glm::dvec3> samplePfdLevel(const PfdLevel& level, uint64_t& rng_state);

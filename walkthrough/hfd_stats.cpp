@@ -76,23 +76,15 @@ HfdSummary summarise(std::span<const HfdEyeStats> eyes, uint64_t fragments) {
   return s;
 }
 
-double levelArea(const PfdLevel& level) {
-  double a = 0.0;
-  for (const PfdTree& t : level.cells) a += std::max(t.stats.region_area, 0.0);
-  return a;
-}
-
-// Eyes per level (hfd_stats.h, HfdStatsOptions::per_level).
-std::vector<uint32_t> eyesPerLevel(const TreeFile& file, const HfdStatsOptions& options) {
-  std::vector<double> area;
+// Eyes per level (hfd_stats.h, HfdStatsOptions::per_level), from the levels' areas.
+std::vector<uint32_t> eyesPerLevel(std::span<const double> area, const HfdStatsOptions& options) {
   double total = 0.0;
   uint32_t with_area = 0;
-  for (const PfdLevel& level : file.levels) {
-    area.push_back(levelArea(level));
-    total += area.back();
-    with_area += area.back() > 0.0;
+  for (const double a : area) {
+    total += a;
+    with_area += a > 0.0;
   }
-  std::vector<uint32_t> n(file.levels.size(), 0);
+  std::vector<uint32_t> n(area.size(), 0);
   const double all = static_cast<double>(options.views) * with_area;
   const uint32_t least = std::min(options.views, kMinLevelEyes);
   for (size_t l = 0; l < n.size(); ++l)
@@ -131,7 +123,13 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
   std::vector<uint32_t> listed_stamp(n, 0), visible_stamp(n, 0);
   uint32_t stamp = 0;
   uint64_t rng = options.seed ^ 0x5DEECE66Dull;
-  const std::vector<uint32_t> wanted = eyesPerLevel(file, options);
+  std::vector<double> area;
+  double area_total = 0.0;
+  for (const PfdLevel& level : file.levels) {
+    area.push_back(pfdLevelArea(level));
+    area_total += area.back();
+  }
+  const std::vector<uint32_t> wanted = eyesPerLevel(area, options);
   std::vector<size_t> first_eye(file.levels.size() + 1, 0);
   for (size_t li = 0; li < file.levels.size(); ++li) {
     const PfdLevel& level = file.levels[li];
@@ -188,12 +186,10 @@ HfdStats computeHfdStats(const TreeFile& file, const HfdStatsOptions& options,
   first_eye.back() = out.eyes.size();
   // Weights from the eyes each level got (an eye on no cell's box is dropped), so that the overall
   // figures are area-weighted whatever the split.
-  double area_total = 0.0;
-  for (const PfdLevel& level : file.levels) area_total += levelArea(level);
   const double eyes_total = static_cast<double>(out.eyes.size());
   for (size_t li = 0; li < file.levels.size(); ++li) {
     const size_t count = first_eye[li + 1] - first_eye[li];
-    const double weight = count ? (levelArea(file.levels[li]) / area_total) / (count / eyes_total) : 0.0;
+    const double weight = count ? (area[li] / area_total) / (count / eyes_total) : 0.0;
     for (size_t k = first_eye[li]; k < first_eye[li + 1]; ++k) out.eyes[k].weight = weight;
     HfdLevelSummary ls;
     ls.level = file.levels[li].level;

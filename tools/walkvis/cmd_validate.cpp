@@ -128,8 +128,7 @@ int runCompare(const ValidateArgs& args, const TreeFile& file, const std::string
   const auto t0 = Clock::now();
   for (size_t l = 0; l < file.levels.size(); ++l) {
     const PfdLevel& level = file.levels[l];
-    double area_sum = 0.0;
-    for (const PfdTree& t : level.cells) area_sum += std::max(t.stats.region_area, 0.0);
+    const double area_sum = pfdLevelArea(level);
     nlohmann::ordered_json lj;
     lj["level"] = level.level;
     lj["height"] = level.height;

@@ -96,5 +96,9 @@ inline void writeFileAtomically(const std::string& path, std::span<const uint8_t
   const std::span<const uint8_t> parts[1] = {bytes};
   writeFileAtomically(path, parts, what);
 }
+// The same for text (CSV, HTML, camera paths).
+inline void writeTextFileAtomically(const std::string& path, std::string_view text, std::string_view what) {
+  writeFileAtomically(path, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), what);
+}
 
 }  // namespace walkvis

@@ -85,7 +85,7 @@ void saveCameraPath(const CameraPath& path, const std::string& file) {
                   k.pitch);
     text += line;
   }
-  writeFileAtomically(file, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), "camera path");
+  writeTextFileAtomically(file, text, "camera path");
 }
 
 }  // namespace walkvis

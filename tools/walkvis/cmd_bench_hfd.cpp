@@ -17,10 +17,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <span>
 #include <sstream>
-#include <memory>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -301,8 +302,14 @@ int runHfdBench(const HfdBenchArgs& args) {
   csv << "point,scene,region_samples,polygon_samples,refine_rays,proof_rays,threads,build_seconds,vis_tests,rays,"
          "rays_per_second,ray_rate_fraction_1thread,ray_rate_fraction_2threads,rejected,tree_bytes,listed_mean,visible_mean,missed_mean,missed_max,"
          "eyes_with_miss,pixel_error_ratio,pixel_error_ratio_max,rejection_ratio,overestimation,eyes,res";
-  // The histogram of per-eye pixel error (hfd_stats.h, kPixelErrorBins), as eye counts.
-  for (const char* bin : {"0", "1e-6", "1e-5", "1e-4", "1e-3", "1e-2", "over_1e-2"}) csv << ",eyes_error_" << bin;
+  // The histogram of per-eye pixel error as eye counts, one column per bin of kPixelErrorBins
+  // (hfd_stats.h) named for a CSV: "<=1e-6" is eyes_error_1e-6, ">1e-2" eyes_error_over_1e-2.
+  for (const std::string_view bin : kPixelErrorBins) {
+    csv << ",eyes_error_";
+    if (bin.starts_with("<=")) csv << bin.substr(2);
+    else if (bin.starts_with(">")) csv << "over_" << bin.substr(1);
+    else csv << bin;
+  }
   csv << '\n';
   std::printf("%s: %zu fragments, %u levels; Embree occlusion rays/s: %.3g (1 thread), %.3g (2 threads)\n",
               scene.name.c_str(), bsp.fragments.size(), levels, rate.rays_per_second_1, rate.rays_per_second_2);
@@ -327,8 +334,7 @@ int runHfdBench(const HfdBenchArgs& args) {
                 static_cast<unsigned long long>(p.bytes), p.stats.listed_mean, p.stats.pixel_error_ratio,
                 p.stats.missed_mean, 100.0 * p.stats.eyes_with_miss, p.stats.overestimation);
   }
-  const std::string text = csv.str();
-  writeFileAtomically(args.csv, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), "the sweep table");
+  writeTextFileAtomically(args.csv, csv.str(), "the sweep table");
   if (!args.png.empty() && !points.empty()) drawPlot(points, args.png);
   if (stopped) std::printf("(stopped after %.0f s: --max-seconds; later points skipped)\n", args.max_seconds);
   std::printf("wrote %s, %s\n", args.csv.c_str(), args.png.c_str());

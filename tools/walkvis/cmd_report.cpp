@@ -443,8 +443,7 @@ int runReport(const ReportArgs& args) {
   }
 
   const std::string html = page.str(title);
-  writeFileAtomically((dir / "index.html").string(),
-                      std::span(reinterpret_cast<const uint8_t*>(html.data()), html.size()), "report page");
+  writeTextFileAtomically((dir / "index.html").string(), html, "report page");
   std::printf("wrote %s\n", (dir / "index.html").string().c_str());
   return 0;
 }

@@ -3,7 +3,6 @@
 // statistics"): per level and overall, listed / visible / missed fragments, pixel_error_ratio,
 // rejection ratio and overestimation with means, maxima and histograms. Progress goes to stderr.
 #include <cstdio>
-#include <span>
 #include <sstream>
 #include <string>
 
@@ -79,8 +78,7 @@ int runStats(const StatsArgs& args) {
     for (const HfdEyeStats& e : stats.eyes)
       csv << e.level << ',' << e.eye.x << ',' << e.eye.y << ',' << e.eye.z << ',' << e.listed << ',' << e.visible
           << ',' << e.missed << ',' << e.error_pixels << ',' << e.pixels << ',' << e.tests << ',' << e.weight << '\n';
-    const std::string text = csv.str();
-    writeFileAtomically(args.csv, std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()), "the eye table");
+    writeTextFileAtomically(args.csv, csv.str(), "the eye table");
   }
   if (args.json) {
     nlohmann::ordered_json j;

@@ -214,8 +214,9 @@ void checkBspMatchesScene(const BspTree& tree, const Scene& scene, const std::st
 // the path when it cannot be written.
 void saveBsp(const BspTree& tree, const std::string& path);
 // The bytes saveBsp writes (header and payload), for files that embed a BSP (pfd.h's tree files).
-// Error naming `context` when the tree's fragment arrays disagree in length.
-std::vector<uint8_t> bspFileBytes(const BspTree& tree, const std::string& context);
+// Error naming `context` when the tree's fragment arrays disagree in length. with_timing false
+// writes build_seconds as 0, so that the bytes depend only on the tree (reproducible builds).
+std::vector<uint8_t> bspFileBytes(const BspTree& tree, const std::string& context, bool with_timing = true);
 // Reads a tree written by saveBsp. Error naming the path for a missing file, a wrong magic
 // or version, a checksum mismatch, a truncated file or any index out of range; never crashes
 // or allocates more than the file's size implies.

@@ -34,7 +34,7 @@ constexpr size_t kNodeBytes = 4 * 8 + 7 * 4;
 
 using Writer = ByteWriter;
 
-std::vector<uint8_t> serialize(const BspTree& tree) {
+std::vector<uint8_t> serialize(const BspTree& tree, bool with_timing) {
   Writer w;
   w.put<uint64_t>(tree.scene_hash);
   w.put<int32_t>(tree.root);
@@ -45,7 +45,7 @@ std::vector<uint8_t> serialize(const BspTree& tree) {
   w.put<double>(s.ratio);
   w.put<uint32_t>(s.depth_max);
   w.put<double>(s.depth_mean);
-  w.put<double>(s.build_seconds);
+  w.put<double>(with_timing ? s.build_seconds : 0.0);
   w.put<uint64_t>(s.bytes);
   w.put<uint64_t>(s.exact_fallbacks);
   w.put<uint64_t>(tree.vertices.size());
@@ -80,11 +80,11 @@ std::vector<uint8_t> serialize(const BspTree& tree) {
 
 }  // namespace
 
-std::vector<uint8_t> bspFileBytes(const BspTree& tree, const std::string& context) {
+std::vector<uint8_t> bspFileBytes(const BspTree& tree, const std::string& context, bool with_timing) {
   if (tree.fragment_polygon.size() != tree.fragments.size() ||
       tree.fragment_orientation.size() != tree.fragments.size())
     throw Error(context + ": BSP tree to save has inconsistent fragment arrays");
-  const std::vector<uint8_t> payload = serialize(tree);
+  const std::vector<uint8_t> payload = serialize(tree, with_timing);
   Writer file;
   for (char c : kMagic) file.put<char>(c);
   file.put<uint32_t>(kVersion);

@@ -32,5 +32,8 @@ function(walkvis_library name dir)
     # The CGAL half may call back into the rest of its library: a cycle CMake resolves by
     # repeating the two static libraries on the link line.
     target_link_libraries(${name}_cgal PRIVATE ${name})
+    # Twice is not always enough: an object pulled in on the second pass may need the other half
+    # again (a test that uses one file of the library).
+    set_property(TARGET ${name} ${name}_cgal PROPERTY LINK_INTERFACE_MULTIPLICITY 3)
   endif()
 endfunction()

@@ -387,21 +387,71 @@ struct PfdLevel {
   std::vector<PfdTree> cells;  // disjoint view cells covering the level's walkable region
 };
 
+// One view cell's build: the unit of work of buildPfdLevels, which may run anywhere (another
+// thread, another process under MPI) as long as it is built with the same PfdCellContext.
+struct PfdCellJob {
+  uint32_t level = 0;          // index into PfdCellContext::levels
+  std::optional<PfdBox> box;   // none: the whole level
+  uint32_t depth = 0;          // times this cell was cut
+  uint64_t budget = 0;         // bytes the tree may take while built (PfdOptions::max_memory; 0: none)
+  bool total_limited = false;  // budget is what the whole build had left (going over is then an error)
+  double cost = 0.0;           // estimate of its work, for the order jobs start in and the ETA
+};
+
+// A job's result: the tree, or none when the build passed the job's budget (with how far it got,
+// as PfdBudgetError records it).
+struct PfdCellOutcome {
+  std::optional<PfdTree> tree;
+  uint64_t stopped_bytes = 0;
+  double stopped_fraction = 0.0;
+};
+
+// What every cell's build reads beside its job; equal on every process of one build.
+struct PfdCellContext {
+  const BspTree* bsp = nullptr;
+  std::span<const FloorLevel> levels;
+  double eye_height = 0.0;
+  PfdLevelOptions options;
+};
+
+// Builds one job. The tree depends on the context and the job only (not on thread or process), so
+// a job built twice gives equal trees. `progress` as PfdOptions::progress.
+PfdCellOutcome buildPfdCell(const PfdCellContext& context, const PfdCellJob& job,
+                            const std::function<void(double)>& progress = {});
+
+// Builds jobs[i] into outcomes[i] for every i (outcomes.size() == jobs.size()), in any order and
+// anywhere, each with buildPfdCell and the context buildPfdLevels was given.
+using PfdCellRunner = std::function<void(std::span<const PfdCellJob> jobs, std::span<PfdCellOutcome> outcomes)>;
+
 // One level's trees, cutting it into view cells where one tree exceeds cell_memory. `used_bytes`
 // counts towards options.max_memory across calls. `progress` (may be empty) gets one line per cell.
 PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
                        const PfdLevelOptions& options, uint64_t& used_bytes,
                        const std::function<void(const std::string&)>& progress = {});
 
-// Every level's trees (levels[k] gets level index k), levels built in parallel with their cells:
-// a Freedoom map has up to a hundred levels of one cell each, whose own work comes in batches
-// too small to keep two threads busy. The result does not depend on thread order. `used_bytes`
-// and `progress` as for buildPfdLevel (progress lines of different levels may interleave).
-// `only` (ascending level indices, each < levels.size()) builds just those levels; empty: all.
+// Every level's trees (levels[k] gets level index k). The build goes in rounds: all levels' planned
+// cells are the jobs of the first round; a cell whose tree passes cell_memory is cut into four,
+// which are jobs of the next. A Freedoom map has up to a hundred levels of one cell each, whose own
+// work comes in batches too small to keep two threads busy, so all levels' jobs run together.
+// `runner` builds each round's jobs (empty: this process's threads, TBB); the result does not
+// depend on the runner, on thread order or on the number of processes. `used_bytes` and `progress`
+// as for buildPfdLevel. `only` (ascending level indices, each < levels.size()) builds just those
+// levels; empty: all.
 std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
                                      const PfdLevelOptions& options, uint64_t& used_bytes,
                                      const std::function<void(const std::string&)>& progress = {},
-                                     std::span<const uint32_t> only = {});
+                                     std::span<const uint32_t> only = {}, const PfdCellRunner& runner = {});
+
+// A tree as bytes (the tree file's layout of one tree) and back: for journals and messages between
+// processes. pfdTreeFromBytes checks what loadTreeFile checks (Error with `context`); `fragments`
+// is the BSP's fragment count.
+std::vector<uint8_t> pfdTreeBytes(const PfdTree& tree);
+PfdTree pfdTreeFromBytes(std::span<const uint8_t> bytes, size_t fragments, const std::string& context);
+// A job and an outcome as bytes and back (ByteReader's Error with `context` on bad bytes).
+std::vector<uint8_t> pfdCellJobBytes(const PfdCellJob& job);
+PfdCellJob pfdCellJobFromBytes(std::span<const uint8_t> bytes, const std::string& context);
+std::vector<uint8_t> pfdCellOutcomeBytes(const PfdCellOutcome& outcome);
+PfdCellOutcome pfdCellOutcomeFromBytes(std::span<const uint8_t> bytes, size_t fragments, const std::string& context);
 
 // The tree of the level's cell that holds (eye.x, eye.z), or null when none does (cells are
 // half-open boxes [lo, hi)).

@@ -13,6 +13,9 @@
 //             i32 back, i32 parent, u32 front_run, u32 back_run), stats (21 u64, 5 f64). A run
 //             reference with the top bit set (kPfdSeqBit) names a sequence, with the next
 //             (kPfdObjectBit) a detail object.
+// Build times (the BSP's and each tree's build_seconds) are written as 0: a file's bytes depend
+// only on the scene and the options, so that builds on any number of processes, resumed or not,
+// write the same file (tools/walkvis/build_runner.cpp). The build's JSON keeps the times.
 // Loading checks everything a query relies on: children after their parent, plane, run and
 // fragment indices in range, so that a loaded tree is queried without further checks.
 #include <algorithm>
@@ -102,7 +105,7 @@ void writeTree(Writer& w, const PfdTree& t) {
                      s.runs, s.seqs, s.seq_items, s.test_planes, s.exact_fallbacks, s.touching, s.decisions, s.tests_max, s.visibility_tests,
                      s.visibility_rays, s.hidden_rejected, s.objects, s.object_nodes, s.object_fragments})
     w.put(v);
-  for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, s.build_seconds, s.tests_huffman_bound}) w.put(v);
+  for (double v : {s.tests_mean, s.tests_entropy_bound, s.region_area, 0.0, s.tests_huffman_bound}) w.put(v);
 }
 
 PfdTree readTree(Reader& r, size_t fragments) {
@@ -274,14 +277,102 @@ PfdTree readTree(Reader& r, size_t fragments) {
     if (static_cast<uint64_t>(x.first) + x.count > ids) r.fail("PFD run out of range");
   for (uint32_t x : t.fragment_ids)
     if (x >= fragments) r.fail("PFD fragment id out of range");
-  measurePfd(t, 0, 0);  // bytes
+  // Bytes only: measurePfd with no eyes would also clear the tests_mean and tests_max just read.
+  const double tests_mean = s.tests_mean;
+  const uint64_t tests_max = s.tests_max;
+  measurePfd(t, 0, 0);
+  s.tests_mean = tests_mean;
+  s.tests_max = tests_max;
   return t;
+}
+
+void writeJob(Writer& w, const PfdCellJob& job) {
+  w.put(job.level);
+  w.put(job.depth);
+  w.put<uint8_t>(job.box ? 1 : 0);
+  const PfdBox box = job.box.value_or(PfdBox{});
+  for (double v : {box.lo.x, box.lo.y, box.hi.x, box.hi.y}) w.put(v);
+  w.put(job.budget);
+  w.put<uint8_t>(job.total_limited ? 1 : 0);
+  w.put(job.cost);
 }
 
 }  // namespace
 
+std::vector<uint8_t> pfdTreeBytes(const PfdTree& tree) {
+  Writer w;
+  writeTree(w, tree);
+  return std::move(w.bytes);
+}
+
+PfdTree pfdTreeFromBytes(std::span<const uint8_t> bytes, size_t fragments, const std::string& context) {
+  Reader r(bytes, context + ": ");
+  PfdTree t = readTree(r, fragments);
+  if (r.remaining() != 0) r.fail("trailing bytes");
+  return t;
+}
+
+std::vector<uint8_t> pfdCellJobBytes(const PfdCellJob& job) {
+  Writer w;
+  writeJob(w, job);
+  return std::move(w.bytes);
+}
+
+PfdCellJob pfdCellJobFromBytes(std::span<const uint8_t> bytes, const std::string& context) {
+  Reader r(bytes, context + ": ");
+  PfdCellJob job;
+  job.level = r.get<uint32_t>();
+  job.depth = r.get<uint32_t>();
+  const uint8_t has_box = r.get<uint8_t>();
+  PfdBox box;
+  box.lo.x = r.getFinite();
+  box.lo.y = r.getFinite();
+  box.hi.x = r.getFinite();
+  box.hi.y = r.getFinite();
+  if (has_box > 1) r.fail("bad view cell flag");
+  if (has_box) job.box = box;
+  job.budget = r.get<uint64_t>();
+  const uint8_t limited = r.get<uint8_t>();
+  if (limited > 1) r.fail("bad budget flag");
+  job.total_limited = limited != 0;
+  job.cost = r.getFinite();
+  if (r.remaining() != 0) r.fail("trailing bytes");
+  return job;
+}
+
+// Outcome: u8 built; built: the tree and f64 its build_seconds (which the tree's layout writes as
+// 0); else u64 stopped_bytes, f64 stopped_fraction.
+std::vector<uint8_t> pfdCellOutcomeBytes(const PfdCellOutcome& outcome) {
+  Writer w;
+  w.put<uint8_t>(outcome.tree ? 1 : 0);
+  if (outcome.tree) {
+    writeTree(w, *outcome.tree);
+    w.put(outcome.tree->stats.build_seconds);
+  } else {
+    w.put(outcome.stopped_bytes);
+    w.put(outcome.stopped_fraction);
+  }
+  return std::move(w.bytes);
+}
+
+PfdCellOutcome pfdCellOutcomeFromBytes(std::span<const uint8_t> bytes, size_t fragments, const std::string& context) {
+  Reader r(bytes, context + ": ");
+  PfdCellOutcome out;
+  const uint8_t built = r.get<uint8_t>();
+  if (built > 1) r.fail("bad outcome flag");
+  if (built) {
+    out.tree = readTree(r, fragments);
+    out.tree->stats.build_seconds = r.getFinite();
+  } else {
+    out.stopped_bytes = r.get<uint64_t>();
+    out.stopped_fraction = r.getFinite();
+  }
+  if (r.remaining() != 0) r.fail("trailing bytes");
+  return out;
+}
+
 void saveTreeFile(const TreeFile& file, const std::string& path) {
-  const std::vector<uint8_t> bsp_bytes = bspFileBytes(file.bsp, path);
+  const std::vector<uint8_t> bsp_bytes = bspFileBytes(file.bsp, path, false);
   Writer w;
   w.put(file.eye_height);
   w.put(static_cast<uint8_t>(file.kind));

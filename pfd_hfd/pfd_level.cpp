@@ -7,19 +7,23 @@
 // by orders of magnitude on large levels, docs/hfd/README.md, "View cells"), while every cell
 // tests every fragment of the level at its root again: an HFD level starts as one cell. Either
 // way, a cell whose build passes the budget is abandoned at once (the builder checks after every
-// node) and cut again. The cells of a level (and, through buildPfdLevels, the levels) are built in
-// parallel (TBB); the result does not depend on thread order.
-#include <atomic>
+// node) and cut again. All levels' cells are jobs (PfdCellJob) built in rounds by a runner: this
+// process's threads (TBB) or, under MPI, every rank's (tools/walkvis/build_runner.cpp). A job's tree
+// is a function of the job alone, and the rounds place each outcome by its job's index, so the
+// result depends neither on thread order nor on where a job ran.
 #include <chrono>
 #include <cstdio>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <mutex>
+#include <numeric>
 
 #include <glm/common.hpp>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
+#include "core/check.h"
 #include "pfd_hfd/pfd.h"
 
 namespace walkvis {
@@ -31,87 +35,182 @@ constexpr double kBytesPerLineSquared = 60.0;
 // Progress lines of a cell's build come at most this often.
 constexpr double kProgressSeconds = 10.0;
 
-struct PlannedCell {
-  std::optional<PfdBox> box;  // none: the whole level
-  uint32_t depth = 0;
+PfdOptions treeOptions(const PfdCellContext& context) {
+  PfdOptions o = context.options.tree;
+  if (context.options.object_extent > 0.0) o.object_extent = context.options.object_extent * context.eye_height;
+  if (!o.drop_back_faces) o.object_extent = 0.0;
+  return o;
+}
+
+// "level L (floor y=Y)", as progress and errors name a level.
+std::string levelName(uint32_t level, const FloorLevel& floor) {
+  return "level " + std::to_string(level) + " (floor y=" + std::to_string(floor.floor_y) + ")";
+}
+
+std::string cellName(const PfdCellContext& context, const PfdCellJob& job) {
+  std::string name = levelName(job.level, context.levels[job.level]);
+  if (job.box) {
+    char t[128];
+    std::snprintf(t, sizeof t, ": cell [%.6g, %.6g) x [%.6g, %.6g)", job.box->lo.x, job.box->hi.x, job.box->lo.y,
+                  job.box->hi.y);
+    name += t;
+  }
+  return name;
+}
+
+// The default runner: this process's threads, the costliest jobs first, one job per task.
+void runLocally(const PfdCellContext& context, std::span<const PfdCellJob> jobs, std::span<PfdCellOutcome> outcomes,
+                const std::function<void(const std::string&)>& say) {
+  std::vector<size_t> order(jobs.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return jobs[a].cost > jobs[b].cost; });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, order.size(), 1),
+      [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t k = range.begin(); k != range.end(); ++k) {
+          const size_t i = order[k];
+          const std::string name = cellName(context, jobs[i]);
+          const auto start = std::chrono::steady_clock::now();
+          double last_report = 0.0;
+          auto progress = [&](double done) {
+            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            if (elapsed - last_report < kProgressSeconds || !(done > 0.0) || done >= 1.0) return;
+            last_report = elapsed;
+            char line[160];
+            std::snprintf(line, sizeof line, ": %.1f%% of its area after %.0f s, about %.0f s to go (ETA by area)",
+                          100.0 * done, elapsed, elapsed * (1.0 - done) / done);
+            say(name + line);
+          };
+          outcomes[i] = buildPfdCell(context, jobs[i], progress);
+          if (const auto& t = outcomes[i].tree)
+            say(name + ": " + std::to_string(t->stats.nodes) + " nodes, " + std::to_string(t->stats.list_entries) +
+                " list entries, " + std::to_string(t->stats.pool_entries) + " pooled ids, " +
+                std::to_string(t->stats.bytes) + " bytes, " + std::to_string(t->stats.build_seconds) + " s");
+        }
+      },
+      tbb::simple_partitioner());
+}
+
+// One level's state between rounds.
+struct LevelBuild {
+  PfdBox bounds;                  // half-open [lo, hi): hi lies just above every walkable corner
+  std::vector<PfdCellJob> cells;  // this round's
 };
 
 }  // namespace
 
-namespace {
+PfdCellOutcome buildPfdCell(const PfdCellContext& context, const PfdCellJob& job,
+                            const std::function<void(double)>& progress) {
+  WALKVIS_DCHECK(job.level < context.levels.size());
+  const FloorLevel& level = context.levels[job.level];
+  PfdOptions o = treeOptions(context);
+  o.max_memory = job.budget;
+  o.progress = progress;
+  PfdCellOutcome out;
+  try {
+    out.tree = buildPfd(*context.bsp, level.walkable, level.floor_y + context.eye_height, job.box, o);
+  } catch (const PfdBudgetError& e) {
+    out.stopped_bytes = e.bytes;
+    out.stopped_fraction = e.area_fraction;
+  }
+  return out;
+}
 
-// buildPfdLevel with the budget shared by levels built at once.
-PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
-                    const PfdLevelOptions& options, std::atomic<uint64_t>& used,
-                    const std::function<void(const std::string&)>& progress) {
-  PfdLevel out;
-  out.level = level_index;
-  out.floor_y = level.floor_y;
-  out.height = level.floor_y + eye_height;
-  const std::string where = "level " + std::to_string(level_index) + " (floor y=" + std::to_string(level.floor_y) + ")";
+PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
+                       const PfdLevelOptions& options, uint64_t& used_bytes,
+                       const std::function<void(const std::string&)>& progress) {
+  std::vector<PfdLevel> out = buildPfdLevels(bsp, std::span<const FloorLevel>(&level, 1), eye_height, options,
+                                             used_bytes, progress);
+  out[0].level = level_index;
+  return std::move(out[0]);
+}
+
+std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
+                                     const PfdLevelOptions& options, uint64_t& used_bytes,
+                                     const std::function<void(const std::string&)>& progress,
+                                     std::span<const uint32_t> only, const PfdCellRunner& runner) {
   std::mutex progress_mutex;
-  auto say = [&](const std::string& line) {
+  const std::function<void(const std::string&)> say = [&](const std::string& line) {
     if (!progress) return;
     std::lock_guard<std::mutex> lock(progress_mutex);
     progress(line);
   };
-
-  // The cell boxes are half-open [lo, hi): hi lies just above every walkable corner.
-  PfdBox bounds{{HUGE_VAL, HUGE_VAL}, {-HUGE_VAL, -HUGE_VAL}};
-  for (const auto& ring : level.walkable)
-    for (const glm::dvec2& p : ring) {
-      bounds.lo = glm::min(bounds.lo, p);
-      bounds.hi = glm::max(bounds.hi, p);
-    }
-  if (!(bounds.lo.x <= bounds.hi.x)) return out;  // nothing walkable
-  bounds.hi.x = std::nextafter(bounds.hi.x, HUGE_VAL);
-  bounds.hi.y = std::nextafter(bounds.hi.y, HUGE_VAL);
-
-  // The four quarters of a cell, or nothing when it cannot be cut (depth or floating point).
-  auto quarters = [&](const PlannedCell& c, std::vector<PlannedCell>& q) {
-    q.clear();
-    const PfdBox b = c.box ? *c.box : bounds;
-    const double mx = b.lo.x + 0.5 * (b.hi.x - b.lo.x), mz = b.lo.y + 0.5 * (b.hi.y - b.lo.y);
-    if (c.depth >= options.max_cell_depth || !(mx > b.lo.x && mx < b.hi.x && mz > b.lo.y && mz < b.hi.y)) return;
-    q.push_back({PfdBox{{b.lo.x, b.lo.y}, {mx, mz}}, c.depth + 1});
-    q.push_back({PfdBox{{mx, b.lo.y}, {b.hi.x, mz}}, c.depth + 1});
-    q.push_back({PfdBox{{b.lo.x, mz}, {mx, b.hi.y}}, c.depth + 1});
-    q.push_back({PfdBox{{mx, mz}, {b.hi.x, b.hi.y}}, c.depth + 1});
-  };
+  PfdCellContext context{&bsp, levels, eye_height, options};
+  std::vector<uint32_t> chosen(only.begin(), only.end());
+  if (only.empty()) {
+    chosen.resize(levels.size());
+    std::iota(chosen.begin(), chosen.end(), uint32_t{0});
+  }
   const bool plan_by_lines = options.tree.visibility == nullptr && options.cell_memory != 0;  // PFD only
-  PfdOptions tree_options = options.tree;
-  if (options.object_extent > 0.0) tree_options.object_extent = options.object_extent * eye_height;
-  if (!tree_options.drop_back_faces) tree_options.object_extent = 0.0;
-  // Once per level: every planned cell counts its lines without the objects'.
-  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, tree_options.object_extent);
+  // Once: every planned cell counts its lines without the objects'.
+  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, treeOptions(context).object_extent);
+  // A cell's job, or none when nothing of the level is walkable in it; `count` its lines.
+  auto makeJob = [&](uint32_t l, std::optional<PfdBox> box, uint32_t depth, PfdLineCount& count) {
+    count = countPfdLines(bsp, levels[l].walkable, levels[l].floor_y + eye_height, box, objects);
+    PfdCellJob job;
+    job.level = l;
+    job.box = box;
+    job.depth = depth;
+    const double lines = static_cast<double>(count.crossing);
+    job.cost = lines * lines;
+    return job;
+  };
+  // The four quarters of a cell, or nothing when it cannot be cut (depth or floating point).
+  auto quarters = [&](const LevelBuild& b, const PfdCellJob& c, std::vector<PfdBox>& q) {
+    q.clear();
+    const PfdBox x = c.box ? *c.box : b.bounds;
+    const double mx = x.lo.x + 0.5 * (x.hi.x - x.lo.x), mz = x.lo.y + 0.5 * (x.hi.y - x.lo.y);
+    if (c.depth >= options.max_cell_depth || !(mx > x.lo.x && mx < x.hi.x && mz > x.lo.y && mz < x.hi.y)) return;
+    q.push_back(PfdBox{{x.lo.x, x.lo.y}, {mx, mz}});
+    q.push_back(PfdBox{{mx, x.lo.y}, {x.hi.x, mz}});
+    q.push_back(PfdBox{{x.lo.x, mz}, {mx, x.hi.y}});
+    q.push_back(PfdBox{{mx, mz}, {x.hi.x, x.hi.y}});
+  };
 
-  // Plan: depth first, so that the cells keep a fixed quadrant order.
-  std::vector<PlannedCell> planned;
-  {
-    std::vector<PlannedCell> stack{{std::nullopt, 0}}, q;
+  std::vector<PfdLevel> out(chosen.size());
+  std::vector<LevelBuild> builds(chosen.size());
+  for (size_t i = 0; i < chosen.size(); ++i) {
+    const uint32_t l = chosen[i];
+    out[i].level = l;
+    out[i].floor_y = levels[l].floor_y;
+    out[i].height = levels[l].floor_y + eye_height;
+    LevelBuild& b = builds[i];
+    b.bounds = PfdBox{{HUGE_VAL, HUGE_VAL}, {-HUGE_VAL, -HUGE_VAL}};
+    for (const auto& ring : levels[l].walkable)
+      for (const glm::dvec2& p : ring) {
+        b.bounds.lo = glm::min(b.bounds.lo, p);
+        b.bounds.hi = glm::max(b.bounds.hi, p);
+      }
+    if (!(b.bounds.lo.x <= b.bounds.hi.x)) continue;  // nothing walkable
+    b.bounds.hi.x = std::nextafter(b.bounds.hi.x, HUGE_VAL);
+    b.bounds.hi.y = std::nextafter(b.bounds.hi.y, HUGE_VAL);
+    // Plan: depth first, so that the cells keep a fixed quadrant order.
+    std::vector<PfdCellJob> stack{PfdCellJob{l, std::nullopt, 0, 0, false, 0.0}};
+    std::vector<PfdBox> q;
+    PfdLineCount count;
     while (!stack.empty()) {
-      const PlannedCell c = stack.back();
+      const PfdCellJob c = stack.back();
       stack.pop_back();
-      const PfdLineCount count = countPfdLines(bsp, level.walkable, out.height, c.box, objects);
+      PfdCellJob job = makeJob(l, c.box, c.depth, count);
       if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
       const double estimate = kBytesPerLineSquared * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
-      if (plan_by_lines && estimate > static_cast<double>(options.cell_memory)) quarters(c, q);
+      if (plan_by_lines && estimate > static_cast<double>(options.cell_memory)) quarters(b, job, q);
       else q.clear();
       if (q.empty()) {
-        planned.push_back(c);
+        b.cells.push_back(job);
       } else {
-        for (size_t k = q.size(); k-- > 0;) stack.push_back(q[k]);
+        for (size_t k = q.size(); k-- > 0;) stack.push_back(PfdCellJob{l, q[k], c.depth + 1, 0, false, 0.0});
       }
     }
+    if (b.cells.size() > 1)
+      say(levelName(l, levels[l]) + ": " + std::to_string(b.cells.size()) + " view cells planned");
   }
-  if (planned.size() > 1) say(where + ": " + std::to_string(planned.size()) + " view cells planned");
 
-  // Build, in rounds: a cell over its budget is replaced by its quarters and built again.
-  // By how much: `need` bytes are a lower bound of what the trees need (those built and, when a
+  // Over the budget: `need` bytes are a lower bound of what the trees need (those built and, when a
   // tree stopped, its bytes then); with the share of that tree's area done, an estimate of the
   // finished trees and that one at the rate it was filling (its bytes grow with the area built,
   // not exactly). Cells not yet begun are not in either figure.
-  auto totalError = [&](uint64_t need, uint64_t stopped_bytes, double stopped_fraction) {
+  auto totalError = [&](const std::string& where, uint64_t need, uint64_t stopped_bytes, double stopped_fraction) {
     const auto gib = [](double b) {  // in the largest binary unit under the value
       char t[32];
       if (b >= 0x1p30) std::snprintf(t, sizeof t, "%.2f GiB", b / 0x1p30);
@@ -131,105 +230,68 @@ PfdLevel buildLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_
     }
     return PfdBudgetError(msg + ", with cells not yet begun on top; raise --max-memory", need, 0.0);
   };
-  std::vector<std::optional<PfdTree>> built;
-  while (!planned.empty()) {
-    built.assign(planned.size(), std::nullopt);
-    std::vector<uint8_t> over(planned.size(), 0);
-    std::vector<uint8_t> total_limited(planned.size(), 0);
-    tbb::parallel_for(size_t{0}, planned.size(), [&](size_t i) {
-      const uint64_t now = used.load();
-      const uint64_t remaining = options.max_memory == 0 ? 0
-                                 : now >= options.max_memory ? 1
-                                                             : options.max_memory - now;
-      PfdOptions o = tree_options;
-      o.max_memory = options.cell_memory;
-      if (remaining != 0 && (o.max_memory == 0 || remaining < o.max_memory)) {
-        o.max_memory = remaining;
-        total_limited[i] = 1;
+
+  // Rounds. Every job of a round gets the budget left when the round starts: a build that fits
+  // the total fits it whichever jobs finish first, so the trees do not depend on the order.
+  uint64_t used = used_bytes;
+  std::vector<PfdCellJob> jobs;
+  std::vector<PfdCellOutcome> outcomes;
+  while (true) {
+    jobs.clear();
+    const uint64_t remaining = options.max_memory == 0 ? 0 : used >= options.max_memory ? 1 : options.max_memory - used;
+    for (const LevelBuild& b : builds)
+      for (PfdCellJob job : b.cells) {
+        job.budget = options.cell_memory;
+        job.total_limited = false;
+        if (remaining != 0 && (job.budget == 0 || remaining < job.budget)) {
+          job.budget = remaining;
+          job.total_limited = true;
+        }
+        jobs.push_back(job);
       }
-      const std::string cell_name = where + ": cell " + std::to_string(i) + "/" + std::to_string(planned.size());
-      const auto start = std::chrono::steady_clock::now();
-      double last_report = 0.0;
-      o.progress = [&](double done) {
-        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (elapsed - last_report < kProgressSeconds || !(done > 0.0) || done >= 1.0) return;
-        last_report = elapsed;
-        char line[160];
-        std::snprintf(line, sizeof line, ": %.1f%% of its area after %.0f s, about %.0f s to go (ETA by area)",
-                      100.0 * done, elapsed, elapsed * (1.0 - done) / done);
-        say(cell_name + line);
-      };
-      try {
-        PfdTree tree = buildPfd(bsp, level.walkable, out.height, planned[i].box, o);
-        const uint64_t after = used.fetch_add(tree.stats.bytes) + tree.stats.bytes;
-        if (options.max_memory != 0 && after > options.max_memory) throw totalError(after, 0, 0.0);
-        say(cell_name + ": " +
-            std::to_string(tree.stats.nodes) + " nodes, " + std::to_string(tree.stats.list_entries) + " list entries, " +
-            std::to_string(tree.stats.pool_entries) + " pooled ids, " + std::to_string(tree.stats.bytes) + " bytes, " +
-            std::to_string(tree.stats.build_seconds) + " s");
-        built[i] = std::move(tree);
-      } catch (const PfdBudgetError& e) {
-        if (total_limited[i] && options.max_memory != 0)
-          throw totalError(used.load() + e.bytes, e.bytes, e.area_fraction);
-        over[i] = 1;
+    if (jobs.empty()) break;
+    outcomes.assign(jobs.size(), PfdCellOutcome{});
+    if (runner) runner(jobs, outcomes);
+    else runLocally(context, jobs, outcomes, say);
+
+    size_t k = 0;
+    std::vector<PfdBox> q;
+    PfdLineCount count;
+    for (size_t i = 0; i < builds.size(); ++i) {
+      LevelBuild& b = builds[i];
+      const FloorLevel& floor = levels[chosen[i]];
+      const std::string where = levelName(chosen[i], floor);
+      std::vector<PfdCellJob> again;
+      for (const PfdCellJob& job : b.cells) {
+        PfdCellOutcome& r = outcomes[k];
+        WALKVIS_DCHECK(jobs[k].level == job.level);
+        const bool total_limited = jobs[k].total_limited;
+        ++k;
+        if (r.tree) {
+          used += r.tree->stats.bytes;
+          if (options.max_memory != 0 && used > options.max_memory) throw totalError(where, used, 0, 0.0);
+          if (!r.tree->region.empty()) out[i].cells.push_back(std::move(*r.tree));
+          continue;
+        }
+        if (total_limited && options.max_memory != 0)
+          throw totalError(where, used + r.stopped_bytes, r.stopped_bytes, r.stopped_fraction);
+        quarters(b, job, q);
+        const PfdBox x = job.box ? *job.box : b.bounds;
+        if (q.empty())
+          throw PfdBudgetError("pfd: " + where + ": a view cell of " + std::to_string(x.hi.x - x.lo.x) + " x " +
+                               std::to_string(x.hi.y - x.lo.y) + " still needs more than " +
+                               std::to_string(options.cell_memory) + " bytes after " + std::to_string(job.depth) +
+                               " subdivisions; raise --cell-memory or --max-memory");
+        say(where + ": a cell went over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
+        for (const PfdBox& c : q) {
+          PfdCellJob next = makeJob(job.level, c, job.depth + 1, count);
+          if (count.area > 0.0) again.push_back(next);
+        }
       }
-    });
-    std::vector<PlannedCell> again, q;
-    for (size_t i = 0; i < planned.size(); ++i) {
-      if (built[i]) {
-        if (!built[i]->region.empty()) out.cells.push_back(std::move(*built[i]));
-        continue;
-      }
-      if (!over[i]) continue;
-      quarters(planned[i], q);
-      const PfdBox b = planned[i].box ? *planned[i].box : bounds;
-      if (q.empty())
-        throw PfdBudgetError("pfd: " + where + ": a view cell of " + std::to_string(b.hi.x - b.lo.x) + " x " +
-                             std::to_string(b.hi.y - b.lo.y) + " still needs more than " +
-                             std::to_string(options.cell_memory) + " bytes after " +
-                             std::to_string(planned[i].depth) + " subdivisions; raise --cell-memory or --max-memory");
-      say(where + ": a cell went over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
-      for (const PlannedCell& c : q)
-        if (countPfdLines(bsp, level.walkable, out.height, c.box, objects).area > 0.0) again.push_back(c);
+      b.cells = std::move(again);
     }
-    planned = std::move(again);
   }
-  return out;
-}
-
-}  // namespace
-
-PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
-                       const PfdLevelOptions& options, uint64_t& used_bytes,
-                       const std::function<void(const std::string&)>& progress) {
-  std::atomic<uint64_t> used{used_bytes};
-  PfdLevel out = buildLevel(bsp, level, level_index, eye_height, options, used, progress);
-  used_bytes = used.load();
-  return out;
-}
-
-std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
-                                     const PfdLevelOptions& options, uint64_t& used_bytes,
-                                     const std::function<void(const std::string&)>& progress,
-                                     std::span<const uint32_t> only) {
-  std::atomic<uint64_t> used{used_bytes};
-  std::mutex progress_mutex;
-  const std::function<void(const std::string&)> say = [&](const std::string& line) {
-    if (!progress) return;
-    std::lock_guard<std::mutex> lock(progress_mutex);
-    progress(line);
-  };
-  std::vector<uint32_t> chosen(only.begin(), only.end());
-  if (only.empty()) {
-    chosen.resize(levels.size());
-    for (size_t l = 0; l < levels.size(); ++l) chosen[l] = static_cast<uint32_t>(l);
-  }
-  std::vector<PfdLevel> out(chosen.size());
-  tbb::parallel_for(size_t{0}, chosen.size(), [&](size_t i) {
-    const uint32_t l = chosen[i];
-    out[i] = buildLevel(bsp, levels[l], l, eye_height, options, used, say);
-  });
-  used_bytes = used.load();
+  used_bytes = used;
   return out;
 }
 

@@ -151,8 +151,11 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
     job.level = l;
     job.box = box;
     job.depth = depth;
+    // A PFD tree's size and time grow with the square of its crossing lines; an HFD tree's time
+    // less steeply (its hidden subtrees get no lines): on freedoom2 MAP01 (49 one-cell levels, one
+    // thread) the ETA by lines² said 1 s with 10 s to go; by lines it was within a third of the time left from 4 s on.
     const double lines = static_cast<double>(count.crossing);
-    job.cost = lines * lines;
+    job.cost = options.tree.visibility ? lines : lines * lines;
     return job;
   };
   // The four quarters of a cell, or nothing when it cannot be cut (depth or floating point).

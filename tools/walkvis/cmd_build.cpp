@@ -10,12 +10,16 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
 #include "bsp/bsp.h"
+#include "build_runner.h"
 #include "commands.h"
 #include "pfd_hfd/pfd.h"
+#include "pfd_hfd/pfd_journal.h"
 
 namespace walkvis {
 namespace {
@@ -51,6 +55,8 @@ struct BuildArgs {
   uint64_t search_work = PfdOptions{}.search_work;
   uint32_t root_search_lines = PfdOptions{}.root_search_lines;
   uint64_t root_search_work = PfdOptions{}.root_search_work;
+  uint32_t threads = 0;  // per process; 0: all cores, shared by the ranks on one machine under MPI
+  bool fresh = false;
   bool json = false;
 };
 
@@ -159,7 +165,36 @@ QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) 
   return t;
 }
 
+int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing);
+
 int runBuild(const BuildArgs& args) {
+  MpiWorld world;
+  bool distributing = false;  // set once the ranks exchange jobs
+  try {
+    return runBuild(args, world, distributing);
+  } catch (const Error& e) {
+    if (!world.active() || world.size() == 1) throw;
+    // Before the ranks exchange jobs every rank meets the same bad input: rank 0 says it once.
+    if (!distributing) {
+      if (world.rank() == 0) throw;
+      return kExitBadInput;
+    }
+    // Afterwards the other ranks may be waiting on this one, or this one on them: end them all.
+    std::fprintf(stderr, "walkvis: %s\n", e.what());
+    std::fflush(stderr);
+    world.abort(kExitBadInput);
+  }
+}
+
+int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing) {
+  const bool leader = world.rank() == 0;
+  // Threads per process: --threads, or under MPI the machine's cores shared by its ranks.
+  uint32_t threads = args.threads;
+  if (threads == 0 && world.active())
+    threads = std::max(1u, std::thread::hardware_concurrency() / static_cast<unsigned>(world.localSize()));
+  std::optional<tbb::global_control> thread_limit;
+  if (threads > 0) thread_limit.emplace(tbb::global_control::max_allowed_parallelism, threads);
+  const uint32_t slots = threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
   if (args.tree != "pfd" && args.tree != "hfd") throw Error("--tree: expected pfd or hfd, got '" + args.tree + "'");
   const bool hfd = args.tree == "hfd";
   if (!hfd && !args.samples.empty()) throw Error("--samples: only for --tree hfd");
@@ -186,7 +221,8 @@ int runBuild(const BuildArgs& args) {
   options.object_extent = args.object_extent;
   if (!(args.object_extent >= 0.0)) throw Error("--object-extent: expected a number >= 0");
 
-  auto progress = [](const std::string& line) {
+  auto progress = [leader](const std::string& line) {
+    if (!leader) return;  // the others' progress is in rank 0's lines
     std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
   };
@@ -224,13 +260,32 @@ int runBuild(const BuildArgs& args) {
              std::to_string(vis_options.region_samples) + "," + std::to_string(vis_options.polygon_samples) + "," +
              std::to_string(vis_options.refine_rays) + ", " + std::to_string(visibility_seconds) + " s");
   }
+  const PfdCellContext context{&file.bsp, scene.levels, scene.eye_height, options};
+  distributing = world.size() > 1;
+  if (!leader) {
+    serveCells(context, world, slots);
+    return 0;
+  }
+  std::string note;
+  PfdJournal journal(args.output + ".journal", pfdBuildFingerprint(file, scene.levels, only, options), args.fresh, note);
+  if (!note.empty()) progress(note);
   uint64_t used = 0;
   const auto build0 = std::chrono::steady_clock::now();
-  progress(std::to_string(only.empty() ? scene.levels.size() : only.size()) + " levels, built in parallel...");
-  file.levels = buildPfdLevels(file.bsp, scene.levels, scene.eye_height, options, used, progress, only);
+  std::string ranks;
+  {
+    CellScheduler scheduler(context, world, slots, &journal, progress);
+    progress(std::to_string(only.empty() ? scene.levels.size() : only.size()) + " levels on " +
+             std::to_string(world.size()) + (world.size() == 1 ? " process" : " ranks") + " of " +
+             std::to_string(slots) + (slots == 1 ? " thread" : " threads") + "...");
+    file.levels = buildPfdLevels(file.bsp, scene.levels, scene.eye_height, options, used, progress, only,
+                                 scheduler.runner());
+    ranks = scheduler.summary();
+  }
+  distributing = false;  // the other ranks have stopped
   const double trees_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - build0).count();
   saveTreeFile(file, args.output);
-  progress("wrote " + args.output);
+  journal.remove();
+  progress("wrote " + args.output + " (" + ranks + ")");
 
   const double n = static_cast<double>(file.bsp.stats.fragments);
   const double log43 = n > 1 ? std::log(n) / std::log(4.0 / 3.0) : 0.0;
@@ -261,6 +316,8 @@ int runBuild(const BuildArgs& args) {
     j["visibility_scene_seconds"] = visibility_seconds;
   }
   j["trees_seconds"] = trees_seconds;
+  j["ranks"] = world.size();
+  j["threads_per_rank"] = slots;
   j["max_memory"] = options.max_memory;
   j["cell_memory"] = options.cell_memory;
   j["heuristic"] = args.heuristic;
@@ -452,6 +509,11 @@ void addBuildCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("--root-search-work", args->root_search_work,
                   "pfd: work the root's search may spend (its own budget)")
       ->check(CLI::Range(uint64_t{0}, uint64_t{1} << 40));
+  sub->add_option("--threads", args->threads,
+                  "Threads per process (default: all cores; under mpirun the cores shared by the ranks on a machine)");
+  sub->add_flag("--fresh", args->fresh,
+                "Start over: discard the journal (OUTPUT.journal) of an interrupted build of the same command, "
+                "which a rerun otherwise goes on from");
   sub->add_flag("--json", args->json, "Print one JSON object");
   sub->callback([args, &runner] { runner = [args] { return runBuild(*args); }; });
 }

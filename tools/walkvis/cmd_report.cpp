@@ -311,12 +311,12 @@ int runReport(const ReportArgs& args) {
                       fmt(t.value("build_seconds", 0.0), 2), fmt(t.value("tests_mean", 0.0), 1),
                       std::to_string(t.value("visibility_tests", 0)), std::to_string(t.value("visibility_rays", 0))});
     page.table({"level", "cell", "nodes", "bytes", "build s", "tests per query", "visibility tests", "rays"}, rows);
-  } else {  // a tree file given: what it stores
+  } else {  // a tree file given: what it stores (not build times, which tree files leave out)
     for (const PfdLevel& l : file.levels)
       for (size_t c = 0; c < l.cells.size(); ++c)
         rows.push_back({std::to_string(l.level), std::to_string(c), std::to_string(l.cells[c].nodes.size()),
-                        std::to_string(l.cells[c].stats.bytes), fmt(l.cells[c].stats.build_seconds, 2)});
-    page.table({"level", "cell", "nodes", "bytes", "build s"}, rows);
+                        std::to_string(l.cells[c].stats.bytes), fmt(l.cells[c].stats.tests_mean, 1)});
+    page.table({"level", "cell", "nodes", "bytes", "tests per query"}, rows);
   }
   if (build.is_object())
     page.p("BSP " + fmt(build.value("bsp_build_seconds", 0.0), 2) + " s, trees " +

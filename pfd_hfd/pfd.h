@@ -423,6 +423,13 @@ PfdCellOutcome buildPfdCell(const PfdCellContext& context, const PfdCellJob& job
 // anywhere, each with buildPfdCell and the context buildPfdLevels was given.
 using PfdCellRunner = std::function<void(std::span<const PfdCellJob> jobs, std::span<PfdCellOutcome> outcomes)>;
 
+// The first round's jobs of buildPfdLevels (budget: cell_memory), or with `by_lines` (true) every
+// level's cells planned by the lines' estimate as PFD levels are, HFD ones too: for sampling a
+// build's cost (walkvis plan). `only` as for buildPfdLevels.
+std::vector<PfdCellJob> planPfdCells(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
+                                     const PfdLevelOptions& options, std::span<const uint32_t> only = {},
+                                     bool by_lines = false);
+
 // One level's trees, cutting it into view cells where one tree exceeds cell_memory. `used_bytes`
 // counts towards options.max_memory across calls. `progress` (may be empty) gets one line per cell.
 PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,

@@ -49,7 +49,7 @@ class PfdJournal {
  private:
   std::string path_;
   int fd_ = -1;
-  std::map<std::vector<uint8_t>, std::vector<uint8_t>> records_;  // job key -> outcome bytes
+  std::map<std::string, std::vector<uint8_t>> records_;  // job key -> outcome bytes
 };
 
 }  // namespace walkvis

@@ -97,6 +97,84 @@ struct LevelBuild {
   std::vector<PfdCellJob> cells;  // this round's
 };
 
+// Plans a level's view cells and makes their jobs.
+class CellPlanner {
+ public:
+  CellPlanner(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height, const PfdLevelOptions& options)
+      : bsp_(bsp), levels_(levels), eye_height_(eye_height), options_(options),
+        // Once: every planned cell counts its lines without the objects'.
+        objects_(pfdObjectNodes(bsp, treeOptions(PfdCellContext{&bsp, levels, eye_height, options}).object_extent)) {}
+
+  // A cell's job; `count` gets its lines (area 0: nothing of the level is walkable in it).
+  PfdCellJob job(uint32_t l, std::optional<PfdBox> box, uint32_t depth, PfdLineCount& count) const {
+    count = countPfdLines(bsp_, levels_[l].walkable, levels_[l].floor_y + eye_height_, box, objects_);
+    PfdCellJob job;
+    job.level = l;
+    job.box = box;
+    job.depth = depth;
+    // A PFD tree's size and time grow with the square of its crossing lines; an HFD tree's time
+    // less steeply (its hidden subtrees get no lines): on freedoom2 MAP01 (49 one-cell levels, one
+    // thread) the ETA by lines² said 1 s with 10 s to go; by lines it was within a third of the
+    // time left from 4 s on.
+    const double lines = static_cast<double>(count.crossing);
+    job.cost = options_.tree.visibility ? lines : lines * lines;
+    return job;
+  }
+
+  // The four quarters of a cell, or nothing when it cannot be cut (depth or floating point).
+  void quarters(const LevelBuild& b, const PfdCellJob& c, std::vector<PfdBox>& q) const {
+    q.clear();
+    const PfdBox x = c.box ? *c.box : b.bounds;
+    const double mx = x.lo.x + 0.5 * (x.hi.x - x.lo.x), mz = x.lo.y + 0.5 * (x.hi.y - x.lo.y);
+    if (c.depth >= options_.max_cell_depth || !(mx > x.lo.x && mx < x.hi.x && mz > x.lo.y && mz < x.hi.y)) return;
+    q.push_back(PfdBox{{x.lo.x, x.lo.y}, {mx, mz}});
+    q.push_back(PfdBox{{mx, x.lo.y}, {x.hi.x, mz}});
+    q.push_back(PfdBox{{x.lo.x, mz}, {mx, x.hi.y}});
+    q.push_back(PfdBox{{mx, mz}, {x.hi.x, x.hi.y}});
+  }
+
+  // Level l's bounds and first cells: the whole level, or with `by_lines` cut in four while the
+  // estimate of a cell's tree passes cell_memory. Depth first, so that the cells keep a fixed
+  // quadrant order.
+  LevelBuild plan(uint32_t l, bool by_lines) const {
+    LevelBuild b;
+    b.bounds = PfdBox{{HUGE_VAL, HUGE_VAL}, {-HUGE_VAL, -HUGE_VAL}};
+    for (const auto& ring : levels_[l].walkable)
+      for (const glm::dvec2& p : ring) {
+        b.bounds.lo = glm::min(b.bounds.lo, p);
+        b.bounds.hi = glm::max(b.bounds.hi, p);
+      }
+    if (!(b.bounds.lo.x <= b.bounds.hi.x)) return b;  // nothing walkable
+    b.bounds.hi.x = std::nextafter(b.bounds.hi.x, HUGE_VAL);
+    b.bounds.hi.y = std::nextafter(b.bounds.hi.y, HUGE_VAL);
+    std::vector<PfdCellJob> stack{PfdCellJob{l, std::nullopt, 0, 0, false, 0.0}};
+    std::vector<PfdBox> q;
+    PfdLineCount count;
+    while (!stack.empty()) {
+      const PfdCellJob c = stack.back();
+      stack.pop_back();
+      PfdCellJob next = job(l, c.box, c.depth, count);
+      if (!(count.area > 0.0)) continue;
+      const double estimate = kBytesPerLineSquared * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
+      if (by_lines && estimate > static_cast<double>(options_.cell_memory)) quarters(b, next, q);
+      else q.clear();
+      if (q.empty()) {
+        b.cells.push_back(next);
+      } else {
+        for (size_t k = q.size(); k-- > 0;) stack.push_back(PfdCellJob{l, q[k], c.depth + 1, 0, false, 0.0});
+      }
+    }
+    return b;
+  }
+
+ private:
+  const BspTree& bsp_;
+  std::span<const FloorLevel> levels_;
+  double eye_height_;
+  const PfdLevelOptions& options_;
+  std::vector<uint8_t> objects_;
+};
+
 }  // namespace
 
 PfdCellOutcome buildPfdCell(const PfdCellContext& context, const PfdCellJob& job,
@@ -114,6 +192,18 @@ PfdCellOutcome buildPfdCell(const PfdCellContext& context, const PfdCellJob& job
     out.stopped_fraction = e.area_fraction;
   }
   return out;
+}
+
+std::vector<PfdCellJob> planPfdCells(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
+                                     const PfdLevelOptions& options, std::span<const uint32_t> only, bool by_lines) {
+  const CellPlanner planner(bsp, levels, eye_height, options);
+  std::vector<PfdCellJob> jobs;
+  for (size_t i = 0; i < (only.empty() ? levels.size() : only.size()); ++i) {
+    const LevelBuild b = planner.plan(only.empty() ? static_cast<uint32_t>(i) : only[i], by_lines && options.cell_memory != 0);
+    jobs.insert(jobs.end(), b.cells.begin(), b.cells.end());
+  }
+  for (PfdCellJob& job : jobs) job.budget = options.cell_memory;
+  return jobs;
 }
 
 PfdLevel buildPfdLevel(const BspTree& bsp, const FloorLevel& level, uint32_t level_index, double eye_height,
@@ -141,35 +231,8 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
     chosen.resize(levels.size());
     std::iota(chosen.begin(), chosen.end(), uint32_t{0});
   }
-  const bool plan_by_lines = options.tree.visibility == nullptr && options.cell_memory != 0;  // PFD only
-  // Once: every planned cell counts its lines without the objects'.
-  const std::vector<uint8_t> objects = pfdObjectNodes(bsp, treeOptions(context).object_extent);
-  // A cell's job, or none when nothing of the level is walkable in it; `count` its lines.
-  auto makeJob = [&](uint32_t l, std::optional<PfdBox> box, uint32_t depth, PfdLineCount& count) {
-    count = countPfdLines(bsp, levels[l].walkable, levels[l].floor_y + eye_height, box, objects);
-    PfdCellJob job;
-    job.level = l;
-    job.box = box;
-    job.depth = depth;
-    // A PFD tree's size and time grow with the square of its crossing lines; an HFD tree's time
-    // less steeply (its hidden subtrees get no lines): on freedoom2 MAP01 (49 one-cell levels, one
-    // thread) the ETA by lines² said 1 s with 10 s to go; by lines it was within a third of the time left from 4 s on.
-    const double lines = static_cast<double>(count.crossing);
-    job.cost = options.tree.visibility ? lines : lines * lines;
-    return job;
-  };
-  // The four quarters of a cell, or nothing when it cannot be cut (depth or floating point).
-  auto quarters = [&](const LevelBuild& b, const PfdCellJob& c, std::vector<PfdBox>& q) {
-    q.clear();
-    const PfdBox x = c.box ? *c.box : b.bounds;
-    const double mx = x.lo.x + 0.5 * (x.hi.x - x.lo.x), mz = x.lo.y + 0.5 * (x.hi.y - x.lo.y);
-    if (c.depth >= options.max_cell_depth || !(mx > x.lo.x && mx < x.hi.x && mz > x.lo.y && mz < x.hi.y)) return;
-    q.push_back(PfdBox{{x.lo.x, x.lo.y}, {mx, mz}});
-    q.push_back(PfdBox{{mx, x.lo.y}, {x.hi.x, mz}});
-    q.push_back(PfdBox{{x.lo.x, mz}, {mx, x.hi.y}});
-    q.push_back(PfdBox{{mx, mz}, {x.hi.x, x.hi.y}});
-  };
-
+  // PFD levels are planned by their lines; HFD levels start whole (the file's head comment).
+  const CellPlanner planner(bsp, levels, eye_height, options);
   std::vector<PfdLevel> out(chosen.size());
   std::vector<LevelBuild> builds(chosen.size());
   for (size_t i = 0; i < chosen.size(); ++i) {
@@ -177,36 +240,9 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
     out[i].level = l;
     out[i].floor_y = levels[l].floor_y;
     out[i].height = levels[l].floor_y + eye_height;
-    LevelBuild& b = builds[i];
-    b.bounds = PfdBox{{HUGE_VAL, HUGE_VAL}, {-HUGE_VAL, -HUGE_VAL}};
-    for (const auto& ring : levels[l].walkable)
-      for (const glm::dvec2& p : ring) {
-        b.bounds.lo = glm::min(b.bounds.lo, p);
-        b.bounds.hi = glm::max(b.bounds.hi, p);
-      }
-    if (!(b.bounds.lo.x <= b.bounds.hi.x)) continue;  // nothing walkable
-    b.bounds.hi.x = std::nextafter(b.bounds.hi.x, HUGE_VAL);
-    b.bounds.hi.y = std::nextafter(b.bounds.hi.y, HUGE_VAL);
-    // Plan: depth first, so that the cells keep a fixed quadrant order.
-    std::vector<PfdCellJob> stack{PfdCellJob{l, std::nullopt, 0, 0, false, 0.0}};
-    std::vector<PfdBox> q;
-    PfdLineCount count;
-    while (!stack.empty()) {
-      const PfdCellJob c = stack.back();
-      stack.pop_back();
-      PfdCellJob job = makeJob(l, c.box, c.depth, count);
-      if (!(count.area > 0.0)) continue;  // nothing walkable in this cell
-      const double estimate = kBytesPerLineSquared * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
-      if (plan_by_lines && estimate > static_cast<double>(options.cell_memory)) quarters(b, job, q);
-      else q.clear();
-      if (q.empty()) {
-        b.cells.push_back(job);
-      } else {
-        for (size_t k = q.size(); k-- > 0;) stack.push_back(PfdCellJob{l, q[k], c.depth + 1, 0, false, 0.0});
-      }
-    }
-    if (b.cells.size() > 1)
-      say(levelName(l, levels[l]) + ": " + std::to_string(b.cells.size()) + " view cells planned");
+    builds[i] = planner.plan(l, options.tree.visibility == nullptr && options.cell_memory != 0);
+    if (builds[i].cells.size() > 1)
+      say(levelName(l, levels[l]) + ": " + std::to_string(builds[i].cells.size()) + " view cells planned");
   }
 
   // Over the budget: `need` bytes are a lower bound of what the trees need (those built and, when a
@@ -278,7 +314,7 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
         }
         if (total_limited && options.max_memory != 0)
           throw totalError(where, used + r.stopped_bytes, r.stopped_bytes, r.stopped_fraction);
-        quarters(b, job, q);
+        planner.quarters(b, job, q);
         const PfdBox x = job.box ? *job.box : b.bounds;
         if (q.empty())
           throw PfdBudgetError("pfd: " + where + ": a view cell of " + std::to_string(x.hi.x - x.lo.x) + " x " +
@@ -287,7 +323,7 @@ std::vector<PfdLevel> buildPfdLevels(const BspTree& bsp, std::span<const FloorLe
                                " subdivisions; raise --cell-memory or --max-memory");
         say(where + ": a cell went over " + std::to_string(options.cell_memory) + " bytes, cut into 4");
         for (const PfdBox& c : q) {
-          PfdCellJob next = makeJob(job.level, c, job.depth + 1, count);
+          PfdCellJob next = planner.job(job.level, c, job.depth + 1, count);
           if (count.area > 0.0) again.push_back(next);
         }
       }

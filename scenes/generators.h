@@ -27,11 +27,12 @@ class GeneratorParams {
   std::set<std::string> used_;
 };
 
-// Dispatches on the name: office, ninefacet, sphere, dome, table_room, house, ramp, hard:<case>.
+// Dispatches on the name: office, campus, ninefacet, sphere, dome, table_room, house, ramp, hard:<case>.
 // Unknown names throw.
 Scene generateScene(const std::string& name, GeneratorParams& params);
 
 Scene generateOffice(GeneratorParams& params);     // gen_office.cpp
+Scene generateCampus(GeneratorParams& params);     // gen_campus.cpp: several offices on one site
 Scene generateNineFacet(GeneratorParams& params);  // gen_shapes.cpp
 Scene generateSphere(GeneratorParams& params);     // gen_shapes.cpp
 Scene generateDome(GeneratorParams& params);       // gen_shapes.cpp

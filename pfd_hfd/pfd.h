@@ -425,10 +425,12 @@ using PfdCellRunner = std::function<void(std::span<const PfdCellJob> jobs, std::
 
 // The first round's jobs of buildPfdLevels (budget: cell_memory), or with `by_lines` (true) every
 // level's cells planned by the lines' estimate as PFD levels are, HFD ones too: for sampling a
-// build's cost (walkvis plan). `only` as for buildPfdLevels.
+// build's cost (walkvis plan). `only` as for buildPfdLevels. `progress` (levels planned, levels,
+// cells so far) is called as each level is planned, from any thread, one call at a time.
 std::vector<PfdCellJob> planPfdCells(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
                                      const PfdLevelOptions& options, std::span<const uint32_t> only = {},
-                                     bool by_lines = false);
+                                     bool by_lines = false,
+                                     const std::function<void(size_t, size_t, size_t)>& progress = {});
 
 // One level's trees, cutting it into view cells where one tree exceeds cell_memory. `used_bytes`
 // counts towards options.max_memory across calls. `progress` (may be empty) gets one line per cell.

@@ -195,13 +195,24 @@ PfdCellOutcome buildPfdCell(const PfdCellContext& context, const PfdCellJob& job
 }
 
 std::vector<PfdCellJob> planPfdCells(const BspTree& bsp, std::span<const FloorLevel> levels, double eye_height,
-                                     const PfdLevelOptions& options, std::span<const uint32_t> only, bool by_lines) {
+                                     const PfdLevelOptions& options, std::span<const uint32_t> only, bool by_lines,
+                                     const std::function<void(size_t, size_t, size_t)>& progress) {
   const CellPlanner planner(bsp, levels, eye_height, options);
+  const size_t count = only.empty() ? levels.size() : only.size();
+  // Levels in parallel (a level's cells are planned one after another: each cut depends on the
+  // last count), concatenated in level order so that the jobs do not depend on the threads.
+  std::vector<LevelBuild> planned(count);
+  std::mutex progress_mutex;
+  size_t levels_done = 0, cells_done = 0;
+  tbb::parallel_for(size_t{0}, count, [&](size_t i) {
+    planned[i] = planner.plan(only.empty() ? static_cast<uint32_t>(i) : only[i], by_lines && options.cell_memory != 0);
+    if (!progress) return;
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    cells_done += planned[i].cells.size();
+    progress(++levels_done, count, cells_done);
+  });
   std::vector<PfdCellJob> jobs;
-  for (size_t i = 0; i < (only.empty() ? levels.size() : only.size()); ++i) {
-    const LevelBuild b = planner.plan(only.empty() ? static_cast<uint32_t>(i) : only[i], by_lines && options.cell_memory != 0);
-    jobs.insert(jobs.end(), b.cells.begin(), b.cells.end());
-  }
+  for (const LevelBuild& b : planned) jobs.insert(jobs.end(), b.cells.begin(), b.cells.end());
   for (PfdCellJob& job : jobs) job.budget = options.cell_memory;
   return jobs;
 }

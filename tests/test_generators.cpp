@@ -7,10 +7,12 @@
 #include <cstdio>
 #include <map>
 #include <string>
+#include <tuple>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "core/rng.h"
 #include "scenes/generators.h"
 #include "scenes/scene.h"
 
@@ -236,6 +238,82 @@ TEST(Generators, OfficeRejectsBadParameters) {
   EXPECT_THROW(gen("sphere", {{"tris", "5"}}), Error);
   EXPECT_THROW(gen("dome", {{"cut", "1.5"}}), Error);
   EXPECT_THROW(gen("ninefacet", {{"seed", "1"}}), Error);
+}
+
+TEST(Generators, CampusIsDeterministicAndItsBuildingsStandApart) {
+  const std::map<std::string, std::string> params{{"buildings", "5"}, {"storeys", "2"}, {"rooms", "12"}, {"seed", "4"}};
+  const Scene a = gen("campus", params);
+  const Scene b = gen("campus", params);
+  auto other = params;
+  other["seed"] = "5";
+  const Scene c = gen("campus", other);
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  EXPECT_TRUE(a.vertices == b.vertices);
+  EXPECT_NE(a.vertices, c.vertices) << "another seed, other buildings";
+  expectValidPolygons(a);
+  expectStartOnWalkable(a);
+  // Storeys at one height are one level across the site, each level's area the sum of its buildings'.
+  ASSERT_EQ(a.levels.size(), 2u);
+  EXPECT_LT(a.levels[0].floor_y, a.levels[1].floor_y);
+  // Each building is the office of its own seed moved onto its site: same polygon count as that
+  // office, and the sites' bounding boxes (x, z) do not overlap.
+  size_t office_polygons = 0;
+  double office_area = 0.0;
+  for (uint64_t k = 0; k < 5; ++k) {
+    const Scene office = gen("office", {{"rooms", "12"}, {"floors", "2"}, {"furniture", "3"},
+                                        {"seed", std::to_string(mixHash(4, k) >> 1)}});
+    office_polygons += office.polygons.size();
+    for (const FloorLevel& l : office.levels) office_area += l.walkable_area;
+  }
+  EXPECT_EQ(a.polygons.size(), office_polygons);
+  EXPECT_NEAR(a.levels[0].walkable_area + a.levels[1].walkable_area, office_area, 1e-9 * office_area);
+  EXPECT_EQ(a.report.input_faces, a.polygons.size());
+  // Faces of one building are consecutive: split the polygons into five runs by face id and check
+  // that the runs' footprints are disjoint.
+  std::vector<std::pair<glm::dvec2, glm::dvec2>> boxes;
+  size_t start = 0;
+  for (uint64_t k = 0; k < 5; ++k) {
+    const size_t count = gen("office", {{"rooms", "12"}, {"floors", "2"}, {"furniture", "3"},
+                                        {"seed", std::to_string(mixHash(4, k) >> 1)}}).polygons.size();
+    glm::dvec2 lo(HUGE_VAL), hi(-HUGE_VAL);
+    for (size_t i = start; i < start + count; ++i)
+      for (const glm::dvec3& v : a.polygonVertices(a.polygons[i])) {
+        lo = glm::min(lo, glm::dvec2(v.x, v.z));
+        hi = glm::max(hi, glm::dvec2(v.x, v.z));
+      }
+    for (const auto& [blo, bhi] : boxes)
+      EXPECT_TRUE(hi.x < blo.x || bhi.x < lo.x || hi.y < blo.y || bhi.y < lo.y) << "building " << k << " overlaps another";
+    boxes.emplace_back(lo, hi);
+    start += count;
+  }
+}
+
+TEST(Generators, CampusPolygonCountsFollowTheDocumentedSizes) {
+  // gen_campus.cpp's formula, about 24 polygons per room cell and storey with 3 boxes per room,
+  // within ±20% over seeds and shapes (the 200k and 1M strings are timed by `walkvis plan`).
+  for (const auto& [buildings, storeys, rooms] : std::vector<std::tuple<int, int, int>>{{1, 1, 40}, {3, 2, 60}, {4, 3, 100}}) {
+    for (const char* seed : {"1", "2"}) {
+      const Scene scene = gen("campus", {{"buildings", std::to_string(buildings)}, {"storeys", std::to_string(storeys)},
+                                         {"rooms", std::to_string(rooms)}, {"seed", seed}});
+      const double expected = 24.0 * buildings * storeys * rooms;
+      EXPECT_NEAR(static_cast<double>(scene.polygons.size()), expected, 0.2 * expected)
+          << buildings << " buildings, " << storeys << " storeys, " << rooms << " rooms";
+      EXPECT_EQ(scene.levels.size(), static_cast<size_t>(storeys));
+    }
+  }
+}
+
+TEST(Generators, CampusRejectsBadParameters) {
+  EXPECT_THROW(gen("campus", {{"buildings", "0"}}), Error);
+  EXPECT_THROW(gen("campus", {{"storeys", "many"}}), Error);
+  EXPECT_THROW(gen("campus", {{"gap", "0.5"}}), Error);
+  try {
+    gen("campus", {{"buildings", "400"}, {"storeys", "100"}, {"rooms", "1000"}});
+    ADD_FAILURE() << "a campus over the size limit was made";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("gen:campus"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("limit"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Generators, SphereIsClosedWithOutwardTriangles) {

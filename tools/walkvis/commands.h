@@ -34,6 +34,7 @@ void addBenchCommand(CLI::App& app, CommandRunner& runner);
 void addBenchBackface(CLI::App& bench, CommandRunner& runner);  // cmd_bench_backface.cpp: `bench backface`
 void addValidateCommand(CLI::App& app, CommandRunner& runner);
 void addBuildCommand(CLI::App& app, CommandRunner& runner);
+void addPlanCommand(CLI::App& app, CommandRunner& runner);  // cmd_plan.cpp: `walkvis plan`
 void addRenderCommand(CLI::App& app, CommandRunner& runner);
 void addWalkCommand(CLI::App& app, CommandRunner& runner);  // cmd_walk.cpp, walk_window.cpp
 void addBenchFrames(CLI::App& bench, CommandRunner& runner);  // cmd_bench_frames.cpp: `bench frames`

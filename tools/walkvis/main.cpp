@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
   addBenchCommand(app, runner);
   addValidateCommand(app, runner);
   addBuildCommand(app, runner);
+  addPlanCommand(app, runner);
   addRenderCommand(app, runner);
   addWalkCommand(app, runner);
   addStatsCommand(app, runner);

@@ -301,9 +301,12 @@ struct PfdLineCount {
   double area = 0.0;
 };
 // Lines inside detail objects (`objects`: pfdObjectNodes of this BSP, or empty for none) are not
-// counted: they are never tested.
+// counted: they are never tested. With `candidates`, only those BSP nodes are tried (a line that
+// misses a cell misses every part of it, so a parent cell's crossing lines serve its quarters);
+// `crossing`, when given, gets the indices of the crossing nodes in the order tried.
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                           const std::optional<PfdBox>& cell, std::span<const uint8_t> objects = {});
+                           const std::optional<PfdBox>& cell, std::span<const uint8_t> objects = {},
+                           const std::vector<uint32_t>* candidates = nullptr, std::vector<uint32_t>* crossing = nullptr);
 
 struct PfdQueryResult {
   uint32_t tests = 0;     // plane tests made (= internal nodes on the path)

@@ -15,6 +15,7 @@
 #include <unordered_map>
 
 #include "bsp/exact_sign.h"
+#include "core/check.h"
 #include "core/hash.h"
 #include "pfd_hfd/pfd.h"
 #include "pfd_hfd/pfd_internal.h"
@@ -1280,7 +1281,8 @@ const char* treeKindName(TreeKind kind) {
 }
 
 PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> walkable, double height,
-                           const std::optional<PfdBox>& cell, std::span<const uint8_t> objects) {
+                           const std::optional<PfdBox>& cell, std::span<const uint8_t> objects,
+                           const std::vector<uint32_t>* candidates, std::vector<uint32_t>* crossing) {
   if (!std::isfinite(height)) throw Error("pfd: height plane is not finite");
   Counters counters;
   const Region region = makeRegion(walkable, cell, counters);
@@ -1289,9 +1291,18 @@ PfdLineCount countPfdLines(const BspTree& bsp, std::span<const std::vector<glm::
   if (region.empty()) return count;
   if (!objects.empty() && objects.size() != bsp.nodes.size())
     throw Error("pfd: object node flags do not match the BSP");
-  for (size_t i = 0; i < bsp.nodes.size(); ++i)
-    if ((objects.empty() || objects[i] == 0) && classifyRegion(planeLine(bsp.nodes[i].plane, height), region, counters) == kCross)
+  auto tryNode = [&](uint32_t i) {
+    WALKVIS_DCHECK(i < bsp.nodes.size());
+    if ((objects.empty() || objects[i] == 0) && classifyRegion(planeLine(bsp.nodes[i].plane, height), region, counters) == kCross) {
       ++count.crossing;
+      if (crossing) crossing->push_back(i);
+    }
+  };
+  if (candidates) {
+    for (uint32_t i : *candidates) tryNode(i);
+  } else {
+    for (size_t i = 0; i < bsp.nodes.size(); ++i) tryNode(static_cast<uint32_t>(i));
+  }
   return count;
 }
 

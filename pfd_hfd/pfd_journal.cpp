@@ -18,21 +18,15 @@ namespace walkvis {
 namespace {
 
 constexpr char kMagic[8] = {'W', 'V', 'J', 'R', 'N', 'L', '\r', '\n'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
 constexpr size_t kHeaderBytes = 24;
 
-// A job's identity in the journal: what decides its tree besides the build's fingerprint. (A
-// string rather than a byte vector as the map key: GCC 12 warns falsely on comparing vectors.)
-std::string jobKey(const PfdCellJob& job) {
-  ByteWriter w;
-  w.put(job.level);
-  w.put(job.depth);
-  w.put<uint8_t>(job.box ? 1 : 0);
-  const PfdBox box = job.box.value_or(PfdBox{});
-  for (double v : {box.lo.x, box.lo.y, box.hi.x, box.hi.y}) w.put(v);
-  w.put(job.budget);
-  w.put<uint8_t>(job.total_limited ? 1 : 0);
-  return std::string(w.bytes.begin(), w.bytes.end());
+// A job's identity in the journal: its bytes without the cost estimate, which does not decide its
+// tree. (A string rather than a byte vector as the map key: GCC 12 warns falsely on comparing vectors.)
+std::string jobKey(PfdCellJob job) {
+  job.cost = 0.0;
+  const std::vector<uint8_t> bytes = pfdCellJobBytes(job);
+  return std::string(bytes.begin(), bytes.end());
 }
 
 [[noreturn]] void failIo(const std::string& path, const std::string& what) {

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <numeric>
 
@@ -105,9 +106,11 @@ class CellPlanner {
         // Once: every planned cell counts its lines without the objects'.
         objects_(pfdObjectNodes(bsp, treeOptions(PfdCellContext{&bsp, levels, eye_height, options}).object_extent)) {}
 
-  // A cell's job; `count` gets its lines (area 0: nothing of the level is walkable in it).
-  PfdCellJob job(uint32_t l, std::optional<PfdBox> box, uint32_t depth, PfdLineCount& count) const {
-    count = countPfdLines(bsp_, levels_[l].walkable, levels_[l].floor_y + eye_height_, box, objects_);
+  // A cell's job; `count` gets its lines (area 0: nothing of the level is walkable in it), tried
+  // among `candidates` (null: all) and listed in `crossing` when given (countPfdLines).
+  PfdCellJob job(uint32_t l, std::optional<PfdBox> box, uint32_t depth, PfdLineCount& count,
+                 const std::vector<uint32_t>* candidates = nullptr, std::vector<uint32_t>* crossing = nullptr) const {
+    count = countPfdLines(bsp_, levels_[l].walkable, levels_[l].floor_y + eye_height_, box, objects_, candidates, crossing);
     PfdCellJob job;
     job.level = l;
     job.box = box;
@@ -147,13 +150,18 @@ class CellPlanner {
     if (!(b.bounds.lo.x <= b.bounds.hi.x)) return b;  // nothing walkable
     b.bounds.hi.x = std::nextafter(b.bounds.hi.x, HUGE_VAL);
     b.bounds.hi.y = std::nextafter(b.bounds.hi.y, HUGE_VAL);
-    std::vector<PfdCellJob> stack{PfdCellJob{l, std::nullopt, 0, 0, false, 0.0}};
+    // Each pending cell carries its parent's crossing lines, the only ones that can cross it:
+    // a cell is counted against its parent's lines, not the whole BSP.
+    using Lines = std::shared_ptr<const std::vector<uint32_t>>;
+    std::vector<std::pair<PfdCellJob, Lines>> stack{{PfdCellJob{l, std::nullopt, 0, 0, false, 0.0}, nullptr}};
     std::vector<PfdBox> q;
     PfdLineCount count;
+    std::vector<uint32_t> crossing;
     while (!stack.empty()) {
-      const PfdCellJob c = stack.back();
+      const auto [c, candidates] = stack.back();
       stack.pop_back();
-      PfdCellJob next = job(l, c.box, c.depth, count);
+      crossing.clear();
+      PfdCellJob next = job(l, c.box, c.depth, count, candidates.get(), by_lines ? &crossing : nullptr);
       if (!(count.area > 0.0)) continue;
       const double estimate = kBytesPerLineSquared * static_cast<double>(count.crossing) * static_cast<double>(count.crossing);
       if (by_lines && estimate > static_cast<double>(options_.cell_memory)) quarters(b, next, q);
@@ -161,7 +169,8 @@ class CellPlanner {
       if (q.empty()) {
         b.cells.push_back(next);
       } else {
-        for (size_t k = q.size(); k-- > 0;) stack.push_back(PfdCellJob{l, q[k], c.depth + 1, 0, false, 0.0});
+        const Lines lines = std::make_shared<const std::vector<uint32_t>>(crossing);
+        for (size_t k = q.size(); k-- > 0;) stack.emplace_back(PfdCellJob{l, q[k], c.depth + 1, 0, false, 0.0}, lines);
       }
     }
     return b;

@@ -47,6 +47,7 @@ class Walker {
 
   double radius() const { return radius_; }
   double stepHeight() const { return step_; }
+  double tolerance() const { return tol_; }  // 1e-9 of the scene's scale (the walls' enlargement)
 
   // The eye put onto the floor under its (x, z): the highest level floor or connection patch there
   // that is at most eye.y − eye height + step height, at exactly that floor + eye height (level -1

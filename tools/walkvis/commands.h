@@ -41,5 +41,6 @@ void addBenchFrames(CLI::App& bench, CommandRunner& runner);  // cmd_bench_frame
 void addStatsCommand(CLI::App& app, CommandRunner& runner);  // cmd_stats.cpp: `stats`
 void addBenchHfd(CLI::App& bench, CommandRunner& runner);  // cmd_bench_hfd.cpp: `bench hfd`, `bench rays`
 void addReportCommand(CLI::App& app, CommandRunner& runner);  // cmd_report.cpp: `report`
+void addExportCommand(CLI::App& app, CommandRunner& runner);  // cmd_export.cpp: `export --web`
 
 }  // namespace walkvis

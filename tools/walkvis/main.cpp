@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
   addWalkCommand(app, runner);
   addStatsCommand(app, runner);
   addReportCommand(app, runner);
+  addExportCommand(app, runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

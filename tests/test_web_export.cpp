@@ -1,0 +1,314 @@
+// `walkvis export FILE --web DIR` and the page it writes (walkthrough/web_export.h, docs/web/README.md):
+//  - the folder is whole and the same bytes every time; bad sources fail before writing anything;
+//  - the viewer's ported rules (viewer.js under Node) give the C++ library's frame orders, walker
+//    moves and placements on an office cut into several view cells and on a house with a stair;
+//  - headless Chromium (SwiftShader WebGL2) draws 24 tour frames whose ids images equal
+//    `walkvis render --ids` of the same keys, with no console errors. Tolerance: a differing pixel
+//    must be an edge pixel of the reference (its 3×3 neighbourhood holds two ids or more: the two
+//    rasterisers may round an edge differently), and at most 1% of all pixels may differ;
+//  - a truncated or corrupted export shows one clear message on the page, not a blank canvas.
+// Node and Chromium steps are skipped where those are missing (scripts/install-deps installs both).
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "command_test_util.h"
+#include "core/byte_io.h"
+#include "core/rng.h"
+#include "png_test_util.h"
+#include "walkthrough/frame.h"
+#include "walkthrough/movement.h"
+#include "walkthrough/web_export.h"
+
+namespace walkvis {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kBinary = WALKVIS_BINARY;
+const std::string kOffice = "gen:office?rooms=12&seed=4";
+const std::string kHouse = "gen:house";
+constexpr int kWidth = 160, kHeight = 120;
+
+int run(const std::string& command) { return runCommand(command); }
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+bool have(const char* tool) { return run(std::string("command -v ") + tool + " > /dev/null 2>&1") == 0; }
+
+std::string chromium(const fs::path& dir) {
+  // Headless, software WebGL2 (ANGLE on SwiftShader), no sandbox as root, a profile of its own, one
+  // CSS pixel per image pixel and sRGB untouched so that ids survive the screenshot bit-exact.
+  return "timeout 120 chromium --headless=new --no-sandbox --use-angle=swiftshader --enable-unsafe-swiftshader "
+         "--disable-dev-shm-usage --force-device-scale-factor=1 --force-color-profile=srgb --hide-scrollbars "
+         "--user-data-dir=" + (dir / "chrome-profile").string() + " ";
+}
+
+class WebExport : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("walkvis_test_web_export_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // The office cut into several view cells (findCell is part of the port), the house whole.
+    build(kOffice, "office", "--cell-memory 16k");
+    build(kHouse, "house", "");
+  }
+  static void TearDownTestSuite() {
+    if (!::testing::UnitTest::GetInstance()->Failed()) fs::remove_all(dir_);
+  }
+  static void build(const std::string& scene, const std::string& name, const std::string& options) {
+    const fs::path tree = dir_ / (name + ".hfd"), web = dir_ / name;
+    const std::string log = (dir_ / (name + ".log")).string();
+    ASSERT_EQ(run(kBinary + " build " + quote(scene) + " --tree hfd " + options + " -o " + tree.string() + " > " + log +
+                  " 2>&1"),
+              0)
+        << readText(log);
+    ASSERT_EQ(run(kBinary + " export " + tree.string() + " --scene " + quote(scene) + " --frames 40 --web " +
+                  web.string() + " > " + log + " 2>&1"),
+              0)
+        << readText(log);
+  }
+  static fs::path dir_;
+};
+fs::path WebExport::dir_;
+
+TEST_F(WebExport, FolderIsWholeAndReproducible) {
+  for (const char* f : {"index.html", "viewer.js", "page.js", "walkvis.bin", "walkvis-data.js"})
+    EXPECT_TRUE(fs::exists(dir_ / "office" / f)) << f;
+  for (const auto& e : fs::directory_iterator(dir_ / "office"))
+    EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+  const std::vector<uint8_t> bin = readFileBytes((dir_ / "office" / "walkvis.bin").string());
+  ASSERT_GE(bin.size(), 40u);
+  EXPECT_EQ(std::string(bin.begin(), bin.begin() + 8), "WALKVISW");
+  EXPECT_EQ(readText(dir_ / "office" / "walkvis-data.js"), webDataScript(bin));
+  // The same bytes from a second run; the page names no network address.
+  const fs::path again = dir_ / "office_again";
+  ASSERT_EQ(run(kBinary + " export " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
+                " --frames 40 --web " + again.string() + " > /dev/null 2>&1"),
+            0);
+  EXPECT_EQ(readFileBytes((again / "walkvis.bin").string()), bin);
+  for (const char* f : {"index.html", "viewer.js", "page.js"})
+    EXPECT_EQ(readText(dir_ / "office" / f).find("http"), std::string::npos) << f;
+}
+
+TEST_F(WebExport, BadSourcesFailBeforeWriting) {
+  const fs::path out = dir_ / "bad_out";
+  const std::string err = (dir_ / "bad.err").string();
+  // A scene, not a tree file.
+  EXPECT_EQ(run(kBinary + " export " + quote(kOffice) + " --web " + out.string() + " 2> " + err), 2);
+  EXPECT_NE(readText(err).find("not a tree file"), std::string::npos) << readText(err);
+  // A PFD tree file.
+  const fs::path pfd = dir_ / "office.pfd";
+  ASSERT_EQ(run(kBinary + " build " + quote(kOffice) + " --tree pfd -o " + pfd.string() + " > /dev/null 2>&1"), 0);
+  EXPECT_EQ(run(kBinary + " export " + pfd.string() + " --web " + out.string() + " 2> " + err), 2);
+  EXPECT_NE(readText(err).find("--tree hfd"), std::string::npos) << readText(err);
+  // A truncated tree file.
+  const std::vector<uint8_t> tree = readFileBytes((dir_ / "office.hfd").string());
+  const fs::path cut = dir_ / "cut.hfd";
+  writeFileAtomically(cut.string(), std::span(tree.data(), tree.size() / 2), "test");
+  EXPECT_EQ(run(kBinary + " export " + cut.string() + " --web " + out.string() + " 2> " + err), 2);
+  EXPECT_NE(readText(err).find(cut.string()), std::string::npos) << readText(err);
+  EXPECT_FALSE(fs::exists(out / "walkvis.bin"));
+}
+
+// The C++ answers the port must reproduce, written as JSON for tests/web/parity.js.
+nlohmann::json expectedAnswers(const std::string& tree, const std::string& scene_spec) {
+  WorldOptions options;
+  options.scene = scene_spec;
+  options.objects = ObjectSet::kNone;
+  const World world = openWorld(tree, options);
+  const Walker walker(world.scene, world.trees.bsp);
+  FrameBuilder builder;
+  std::vector<uint32_t> draw;
+  nlohmann::json out;
+  const Bounds b = sceneBounds(world.scene);
+  out["scale"] = std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z), std::abs(b.hi.x),
+                           std::abs(b.hi.y), std::abs(b.hi.z)});
+  uint64_t rng = 7;
+  auto order = [&](const glm::dvec3& eye) {
+    FreeCamera camera;
+    camera.eye = eye;
+    const FrameStats s = builder.build(world, camera, OrderMode::kHfd, draw);
+    out["orders"].push_back({{"eye", {eye.x, eye.y, eye.z}}, {"ids", draw}, {"used", orderModeName(s.used)}});
+  };
+  for (const PfdLevel& level : world.trees.levels)
+    for (int k = 0; k < 150; ++k)
+      if (const auto eye = samplePfdLevel(level, rng)) {
+        order(*eye);
+        if (k % 5 == 0) order(*eye + glm::dvec3(0.0, 0.37 * world.scene.eye_height, 0.0));  // off the plane
+      }
+  // Walks: random headings and step lengths from the start, each move recorded from its state.
+  WalkState state = walker.place(world.scene.start_eye);
+  out["moves"] = nlohmann::json::array();
+  for (int k = 0; k < 1500; ++k) {
+    const double heading = 6.283185307179586 * uniform01(rng);
+    const double length = world.scene.eye_height * (k % 7 == 0 ? 1.5 : 0.25) * uniform01(rng);
+    const glm::dvec2 d(length * std::sin(heading), length * std::cos(heading));
+    const WalkState to = walker.move(state, d);
+    out["moves"].push_back({{"from", {{"eye", {state.eye.x, state.eye.y, state.eye.z}}, {"level", state.level}}},
+                            {"d", {d.x, d.y}},
+                            {"to", {{"eye", {to.eye.x, to.eye.y, to.eye.z}}, {"level", to.level}}}});
+    state = to;
+    if (k % 300 == 299) state = walker.place(world.scene.start_eye);
+    // Now and then restart on a stair patch, so that the walks step onto and off connections.
+    if (k % 10 == 9 && !world.scene.connections.empty()) {
+      const auto& patches = world.scene.connections[splitmix64(rng) % world.scene.connections.size()].patches;
+      if (!patches.empty()) {
+        const WalkablePatch& p = patches[splitmix64(rng) % patches.size()];
+        glm::dvec2 c(0.0);
+        for (const glm::dvec2& v : p.piece) c += v / static_cast<double>(p.piece.size());
+        const double y = (p.plane.d - p.plane.n.x * c.x - p.plane.n.z * c.y) / p.plane.n.y;
+        state = walker.place(glm::dvec3(c.x, y + world.scene.eye_height, c.y));
+      }
+    }
+  }
+  out["places"] = nlohmann::json::array();
+  for (int k = 0; k < 200; ++k) {
+    const glm::dvec3 eye(b.lo.x + (b.hi.x - b.lo.x) * uniform01(rng), b.lo.y + (b.hi.y - b.lo.y) * uniform01(rng),
+                         b.lo.z + (b.hi.z - b.lo.z) * uniform01(rng));
+    const WalkState to = walker.place(eye);
+    out["places"].push_back({{"eye", {eye.x, eye.y, eye.z}}, {"to", {{"eye", {to.eye.x, to.eye.y, to.eye.z}}, {"level", to.level}}}});
+  }
+  return out;
+}
+
+TEST_F(WebExport, ViewerRulesEqualTheLibrary) {
+  if (!have("node")) GTEST_SKIP() << "node is not installed";
+  for (const auto& [name, spec] : {std::pair{std::string("office"), kOffice}, std::pair{std::string("house"), kHouse}}) {
+    SCOPED_TRACE(name);
+    const nlohmann::json expected = expectedAnswers((dir_ / (name + ".hfd")).string(), spec);
+    size_t level_changes = 0, hfd = 0;
+    for (const auto& m : expected["moves"]) level_changes += m["from"]["level"] != m["to"]["level"];
+    for (const auto& o : expected["orders"]) hfd += o["used"] == "hfd";
+    EXPECT_GT(hfd, 100u);
+    EXPECT_LT(hfd, expected["orders"].size()) << "some eyes must take the BSP order";
+    if (name == "house") {
+      EXPECT_GT(level_changes, 20u) << "the walks must use the stair";
+    }
+    const fs::path file = dir_ / (name + "_expected.json");
+    std::ofstream(file) << expected.dump();
+    const std::string log = (dir_ / (name + "_parity.log")).string();
+    EXPECT_EQ(run("node " + std::string(WALKVIS_SOURCE_DIR) + "/tests/web/parity.js " + (dir_ / name).string() + " " +
+                  file.string() + " > " + log + " 2>&1"),
+              0)
+        << readText(log);
+    std::printf("%s: %s", name.c_str(), readText(log).c_str());
+  }
+}
+
+// Ids images hold id + 1 little-endian in R, G, B (scene_drawer.h); 0 is nothing.
+uint32_t idAt(const Image& image, int x, int y) {
+  const size_t p = 3 * (static_cast<size_t>(y) * image.width + x);  // any image width: a screenshot is cropped
+  return uint32_t(image.rgb[p]) | uint32_t(image.rgb[p + 1]) << 8 | uint32_t(image.rgb[p + 2]) << 16;
+}
+
+bool edgePixel(const Image& image, int x, int y) {
+  const uint32_t id = idAt(image, x, y);
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int u = x + dx, v = y + dy;
+      if (u >= 0 && v >= 0 && u < image.width && v < image.height && idAt(image, u, v) != id) return true;
+    }
+  return false;
+}
+
+TEST_F(WebExport, PageDrawsWhatRenderDraws) {
+  if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
+  constexpr int kFrames = 24;
+  const fs::path ref = dir_ / "render", web = dir_ / "office";
+  const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
+  ASSERT_EQ(run(kBinary + " render " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
+                " --ids --objects none --frames " + std::to_string(kFrames) + " --size " + size + " --out " +
+                ref.string() + " > /dev/null 2>&1"),
+            0);
+  // Loads with no console message at all (errors, warnings, logs) and says it drew.
+  const fs::path dom = dir_ / "dom.html", err = dir_ / "chromium.err";
+  ASSERT_EQ(run(chromium(dir_) + "--enable-logging=stderr --v=0 --virtual-time-budget=10000 --dump-dom 'file://" +
+                (web / "index.html").string() + "?frame=3&ids=1&size=" + size + "' > " + dom.string() + " 2> " +
+                err.string()),
+            0);
+  EXPECT_NE(readText(dom).find("data-drawn=\"1\""), std::string::npos) << readText(dom);
+  EXPECT_EQ(readText(err).find("CONSOLE"), std::string::npos) << readText(err);
+
+  size_t pixels = 0, differing = 0, inner_differing = 0;
+  std::set<uint32_t> ids;
+  for (int k = 0; k < kFrames; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", k);
+    const fs::path shot = dir_ / ("page_" + std::string(name));
+    // The window is larger than the canvas (headless Chromium lays a window below about 300 pixels
+    // wide out oddly); the canvas is the screenshot's top-left corner.
+    ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=" + shot.string() + " 'file://" +
+                  (web / "index.html").string() + "?frame=" + std::to_string(k) + "&ids=1&size=" + size +
+                  "' > /dev/null 2>&1"),
+              0);
+    const Image a = readPng((ref / name).string()), b = readPng(shot.string());
+    ASSERT_EQ(a.width, kWidth) << name;
+    ASSERT_GE(b.width, kWidth) << name;
+    ASSERT_GE(b.height, kHeight) << name;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        ++pixels;
+        ids.insert(idAt(a, x, y));
+        if (idAt(a, x, y) == idAt(b, x, y)) continue;
+        ++differing;
+        if (!edgePixel(a, x, y)) {
+          ++inner_differing;
+          if (inner_differing <= 5)
+            ADD_FAILURE() << name << " (" << x << ", " << y << "): page id " << idAt(b, x, y) << ", render id "
+                          << idAt(a, x, y) << " away from any edge";
+        }
+      }
+  }
+  std::printf("page against render: %d frames, %zu pixels, %zu differing (%zu off edges), %zu distinct ids\n",
+              kFrames, pixels, differing, inner_differing, ids.size());
+  EXPECT_EQ(inner_differing, 0u);
+  EXPECT_LE(differing, pixels / 100);
+  EXPECT_GT(ids.size(), 30u) << "the frames must show the building";
+}
+
+TEST_F(WebExport, BrokenExportShowsAMessage) {
+  if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
+  const std::vector<uint8_t> bin = readFileBytes((dir_ / "office" / "walkvis.bin").string());
+  struct Case {
+    const char* name;
+    std::string script;  // walkvis-data.js
+    const char* message;
+  };
+  std::vector<uint8_t> flipped = bin;
+  flipped[flipped.size() / 2] ^= 0x40;
+  const std::string whole = webDataScript(bin);
+  const std::vector<Case> cases = {
+      {"truncated_script", whole.substr(0, whole.size() / 2), "truncated or malformed"},
+      {"truncated_binary", webDataScript(std::span(bin.data(), bin.size() - 1000)), "truncated"},
+      {"flipped_byte", webDataScript(flipped), "checksum mismatch"},
+      {"not_an_export", webDataScript(std::vector<uint8_t>(100, 7)), "not a walkvis web export"},
+      {"missing", "", "missing or unreadable"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path web = dir_ / (std::string("broken_") + c.name);
+    fs::create_directories(web);
+    for (const char* f : {"index.html", "viewer.js", "page.js"})
+      fs::copy_file(dir_ / "office" / f, web / f, fs::copy_options::overwrite_existing);
+    if (!c.script.empty()) writeTextFileAtomically((web / "walkvis-data.js").string(), c.script, "test");
+    const fs::path dom = web / "dom.html";
+    ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --dump-dom 'file://" + (web / "index.html").string() +
+                  "?frame=0' > " + dom.string() + " 2> /dev/null"),
+              0);
+    const std::string text = readText(dom);
+    EXPECT_NE(text.find("data-error=\""), std::string::npos) << text.substr(0, 400);
+    EXPECT_NE(text.find(c.message), std::string::npos) << text.substr(0, 400);
+    EXPECT_EQ(text.find("data-drawn"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace walkvis

@@ -1,0 +1,54 @@
+// node tests/web/parity.js EXPORT_DIR EXPECTED_JSON: the viewer's ported rules against the C++
+// library's answers, written by tests/test_web_export.cpp for the same export:
+//   orders  frame orders (FrameBuilder::build, mode hfd, no culling) at eyes on and off the levels'
+//           height planes: the same fragment ids in the same order, and the same source (hfd/bsp)
+//   moves   Walker::move from recorded states: the same level, the eye within 1e-9 of the scene's
+//           scale (std::hypot and Math.hypot may round differently in the last bit)
+//   places  Walker::place: the same
+// Prints one summary line; exit status 0 when everything agrees, 1 otherwise.
+'use strict';
+const fs = require('fs');
+const path = require('path');
+const W = require(path.join(__dirname, '..', '..', 'walkthrough', 'web', 'viewer.js'));
+
+const [dir, expectedFile] = process.argv.slice(2);
+const b = fs.readFileSync(path.join(dir, 'walkvis.bin'));
+const scene = W.parseExport(b.buffer.slice(b.byteOffset, b.byteOffset + b.length), 'walkvis.bin');
+const expected = JSON.parse(fs.readFileSync(expectedFile, 'utf8'));
+const walker = new W.Walker(scene);
+const order = W.makeOrder(scene);
+const tol = Math.max(expected.scale, 1) * 1e-9;
+let failures = 0;
+const fail = (what) => {
+  if (failures++ < 10) console.log('MISMATCH ' + what);
+};
+
+let hfd = 0, ids = 0;
+expected.orders.forEach((o, i) => {
+  W.frameOrder(scene, o.eye, order);
+  const got = Array.from(order.ids.subarray(0, order.n));
+  if (order.used !== o.used) fail('order ' + i + ': used ' + order.used + ', C++ ' + o.used);
+  if (got.length !== o.ids.length || got.some((v, k) => v !== o.ids[k]))
+    fail('order ' + i + ' at ' + o.eye + ': ' + got.length + ' ids, C++ ' + o.ids.length);
+  hfd += o.used === 'hfd';
+  ids += o.ids.length;
+});
+
+const near = (a, b) => a.every((v, k) => Math.abs(v - b[k]) <= tol);
+let blocked = 0, level_changes = 0;
+expected.moves.forEach((m, i) => {
+  const to = walker.move({ eye: m.from.eye.slice(), level: m.from.level }, m.d[0], m.d[1]);
+  if (to.level !== m.to.level || !near(to.eye, m.to.eye))
+    fail('move ' + i + ': (' + to.eye + ') level ' + to.level + ', C++ (' + m.to.eye + ') level ' + m.to.level);
+  blocked += m.to.eye[0] === m.from.eye[0] && m.to.eye[2] === m.from.eye[2];
+  level_changes += m.to.level !== m.from.level;
+});
+expected.places.forEach((p, i) => {
+  const got = walker.place(p.eye);
+  if (got.level !== p.to.level || !near(got.eye, p.to.eye)) fail('place ' + i + ': level ' + got.level + ', C++ ' + p.to.level);
+});
+
+console.log('parity: ' + expected.orders.length + ' orders (' + hfd + ' from HFD trees, ' + ids + ' ids), ' +
+            expected.moves.length + ' moves (' + blocked + ' blocked, ' + level_changes + ' level changes), ' +
+            expected.places.length + ' places: ' + failures + ' mismatches');
+process.exit(failures === 0 ? 0 : 1);

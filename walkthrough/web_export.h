@@ -1,0 +1,57 @@
+// A building and its HFD trees as a static web page (`walkvis export FILE --web DIR`): index.html,
+// the viewer scripts (walkthrough/web/, embedded in the binary) and one binary of everything a
+// frame needs, in the format docs/web/README.md describes (versioned, little-endian, each section
+// checksummed with FNV-1a 64, view cells in sections of their own).
+//
+// The page walks the building by the C++ rules, ported (walkthrough/web/viewer.js): the order of
+// a frame is FrameBuilder::build's for mode hfd with no backface culling, the walking is Walker's,
+// the camera is clipFromEyeRelative(FreeCamera)'s. The automatic tour is computed here and stored,
+// so `index.html?frame=K` shows the view `walkvis render` draws for key K of the same tour.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "walkthrough/frame.h"
+#include "walkthrough/movement.h"
+
+namespace walkvis {
+
+struct WebExportOptions {
+  uint32_t tour_frames = 120;  // keys of the automatic tour stored for ?frame=K (automaticTour, 30 fps)
+  MoveOptions move;            // the walker's radius and step, as the window uses
+};
+
+struct WebExportReport {
+  std::vector<std::pair<std::string, uint64_t>> sections;  // tag and bytes, in file order (CELL summed)
+  uint64_t binary_bytes = 0;  // walkvis.bin
+  uint64_t script_bytes = 0;  // walkvis-data.js: the same bytes in base64, for pages opened from file://
+  uint64_t page_bytes = 0;    // index.html and the viewer scripts
+  uint32_t cells = 0;
+  uint32_t tour_keys = 0;
+};
+
+// The binary (walkvis.bin). `world` must hold HFD trees (Error otherwise). Deterministic.
+std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& options = {},
+                                    WebExportReport* report = nullptr);
+
+// walkvis-data.js for `bytes`: one call walkvisData("<base64>"), the form a page opened from
+// file:// can load (browsers refuse fetch() there, not <script src>).
+std::string webDataScript(std::span<const uint8_t> bytes);
+
+// Writes the folder: index.html, viewer.js, page.js, walkvis.bin, walkvis-data.js, each through a
+// temporary file and a rename. Error naming the folder or file that cannot be written.
+WebExportReport writeWebExport(const World& world, const std::string& dir, const WebExportOptions& options = {});
+
+// The embedded page files (web_assets.cpp, generated from walkthrough/web/ at build time).
+struct WebAsset {
+  const char* name;
+  const unsigned char* data;
+  size_t size;
+};
+std::vector<WebAsset> webAssets();
+
+}  // namespace walkvis

@@ -30,7 +30,7 @@ constexpr size_t kTocEntryBytes = 32;
 
 struct Section {
   char tag[4];
-  std::vector<uint8_t> bytes;
+  ByteWriter out;  // the section's bytes
 };
 
 Section section(const char* tag) {
@@ -39,41 +39,27 @@ Section section(const char* tag) {
   return s;
 }
 
-template <typename T>
-void put(std::vector<uint8_t>& out, T value) {
-  const size_t at = out.size();
-  out.resize(at + sizeof(T));
-  std::memcpy(out.data() + at, &value, sizeof(T));
-}
-
-void putPlane(std::vector<uint8_t>& out, const Plane& p) {
-  put(out, p.n.x);
-  put(out, p.n.y);
-  put(out, p.n.z);
-  put(out, p.d);
-}
-
 // WALK: the walker's floors as doubles (counts too: exact below 2^53): levels, then connections.
-std::vector<uint8_t> walkSection(const Scene& scene) {
-  std::vector<uint8_t> out;
+ByteWriter walkSection(const Scene& scene) {
+  ByteWriter out;
   auto ring = [&](const std::vector<glm::dvec2>& r) {
-    put(out, static_cast<double>(r.size()));
+    out.put(static_cast<double>(r.size()));
     for (const glm::dvec2& p : r) {
-      put(out, p.x);
-      put(out, p.y);
+      out.put(p.x);
+      out.put(p.y);
     }
   };
-  put(out, static_cast<double>(scene.levels.size()));
+  out.put(static_cast<double>(scene.levels.size()));
   for (const FloorLevel& l : scene.levels) {
-    put(out, l.floor_y);
-    put(out, static_cast<double>(l.walkable.size()));
+    out.put(l.floor_y);
+    out.put(static_cast<double>(l.walkable.size()));
     for (const auto& piece : l.walkable) ring(piece);
   }
-  put(out, static_cast<double>(scene.connections.size()));
+  out.put(static_cast<double>(scene.connections.size()));
   for (const WalkableConnection& c : scene.connections) {
-    put(out, static_cast<double>(c.patches.size()));
+    out.put(static_cast<double>(c.patches.size()));
     for (const WalkablePatch& p : c.patches) {
-      putPlane(out, p.plane);
+      out.putPlane(p.plane);
       ring(p.piece);
     }
   }
@@ -81,8 +67,8 @@ std::vector<uint8_t> walkSection(const Scene& scene) {
 }
 
 // CELL: u32 header[16], f64 box[4], f64 planes, then the u32 arrays of the tree (pfd.h).
-std::vector<uint8_t> cellSection(const PfdTree& t, uint32_t level) {
-  std::vector<uint8_t> out;
+ByteWriter cellSection(const PfdTree& t, uint32_t level) {
+  ByteWriter out;
   const uint32_t head[16] = {level,
                              t.cell ? 1u : 0u,
                              static_cast<uint32_t>(t.planes.size()),
@@ -95,44 +81,44 @@ std::vector<uint8_t> cellSection(const PfdTree& t, uint32_t level) {
                              static_cast<uint32_t>(t.objects.size()),
                              static_cast<uint32_t>(t.object_nodes.size()),
                              0, 0, 0, 0, 0};
-  for (uint32_t h : head) put(out, h);
+  for (uint32_t h : head) out.put(h);
   const PfdBox box = t.cell.value_or(PfdBox{});
-  put(out, box.lo.x);
-  put(out, box.lo.y);
-  put(out, box.hi.x);
-  put(out, box.hi.y);
-  for (const Plane& p : t.planes) putPlane(out, p);
+  out.put(box.lo.x);
+  out.put(box.lo.y);
+  out.put(box.hi.x);
+  out.put(box.hi.y);
+  for (const Plane& p : t.planes) out.putPlane(p);
   for (const PfdNode& n : t.nodes) {
-    put(out, n.plane);
-    put(out, n.front);
-    put(out, n.back);
-    put(out, n.first_ref);
-    put(out, n.ref_count);
+    out.put(n.plane);
+    out.put(n.front);
+    out.put(n.back);
+    out.put(n.first_ref);
+    out.put(n.ref_count);
   }
-  for (uint32_t r : t.run_refs) put(out, r);
+  for (uint32_t r : t.run_refs) out.put(r);
   for (const PfdRun& r : t.runs) {
-    put(out, r.first);
-    put(out, r.count);
+    out.put(r.first);
+    out.put(r.count);
   }
   for (const PfdSeq& s : t.seqs) {
-    put(out, s.first);
-    put(out, s.count);
-    put(out, s.length);
+    out.put(s.first);
+    out.put(s.count);
+    out.put(s.length);
   }
-  for (uint32_t i : t.seq_items) put(out, i);
-  for (uint32_t f : t.fragment_ids) put(out, f);
+  for (uint32_t i : t.seq_items) out.put(i);
+  for (uint32_t f : t.fragment_ids) out.put(f);
   for (const PfdObject& o : t.objects) {
-    put(out, o.root);
-    put(out, o.nodes);
-    put(out, o.fragments);
+    out.put(o.root);
+    out.put(o.nodes);
+    out.put(o.fragments);
   }
   for (const PfdObjectNode& o : t.object_nodes) {
-    put(out, o.plane);
-    put(out, o.front);
-    put(out, o.back);
-    put(out, o.parent);
-    put(out, o.front_run);
-    put(out, o.back_run);
+    out.put(o.plane);
+    out.put(o.front);
+    out.put(o.back);
+    out.put(o.parent);
+    out.put(o.front_run);
+    out.put(o.back_run);
   }
   return out;
 }
@@ -204,15 +190,15 @@ std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& 
   {
     Section s = section("META");
     const std::string text = metaJson(world, tour, walker).dump();
-    s.bytes.assign(text.begin(), text.end());
+    s.out.bytes.assign(text.begin(), text.end());
     sections.push_back(std::move(s));
   }
   {
     Section s = section("VERT");
     for (const glm::dvec3& v : bsp.vertices) {
-      put(s.bytes, v.x);
-      put(s.bytes, v.y);
-      put(s.bytes, v.z);
+      s.out.put(v.x);
+      s.out.put(v.y);
+      s.out.put(v.z);
     }
     sections.push_back(std::move(s));
   }
@@ -221,11 +207,11 @@ std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& 
     for (const Polygon& poly : bsp.fragments) {
       const uint32_t color = poly.face_id < world.scene.face_colors.size() ? world.scene.face_colors[poly.face_id]
                                                                            : faceColor(poly.face_id);
-      put(f.bytes, poly.first_vertex);
-      put(f.bytes, poly.vertex_count);
-      put(f.bytes, poly.face_id);
-      put(f.bytes, color);
-      putPlane(p.bytes, poly.plane);
+      f.out.put(poly.first_vertex);
+      f.out.put(poly.vertex_count);
+      f.out.put(poly.face_id);
+      f.out.put(color);
+      p.out.putPlane(poly.plane);
     }
     sections.push_back(std::move(f));
     sections.push_back(std::move(p));
@@ -233,63 +219,64 @@ std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& 
   {
     Section n = section("BNOD"), p = section("BPLN");
     for (const BspNode& node : bsp.nodes) {
-      put(n.bytes, node.front);
-      put(n.bytes, node.back);
-      put(n.bytes, node.first_fragment);
-      put(n.bytes, node.fragment_count);
-      putPlane(p.bytes, node.plane);
+      n.out.put(node.front);
+      n.out.put(node.back);
+      n.out.put(node.first_fragment);
+      n.out.put(node.fragment_count);
+      p.out.putPlane(node.plane);
     }
     sections.push_back(std::move(n));
     sections.push_back(std::move(p));
   }
   {
     Section s = section("WALK");
-    s.bytes = walkSection(world.scene);
+    s.out = walkSection(world.scene);
     sections.push_back(std::move(s));
   }
   uint32_t cells = 0;
   for (uint32_t l = 0; l < world.trees.levels.size(); ++l) {
     for (const PfdTree& t : world.trees.levels[l].cells) {
       Section s = section("CELL");
-      s.bytes = cellSection(t, l);
+      s.out = cellSection(t, l);
       sections.push_back(std::move(s));
       ++cells;
     }
   }
 
   // Header, table of sections, then the sections, each padded to 8 bytes.
-  std::vector<uint8_t> toc;
+  ByteWriter toc;
   uint64_t offset = kHeaderBytes + kTocEntryBytes * sections.size();
   offset = (offset + 7) & ~uint64_t{7};
   const uint64_t first_offset = offset;
   for (const Section& s : sections) {
-    toc.insert(toc.end(), s.tag, s.tag + 4);
-    put(toc, uint32_t{0});
-    put(toc, offset);
-    put(toc, static_cast<uint64_t>(s.bytes.size()));
-    put(toc, fnv1a(s.bytes.data(), s.bytes.size()));
-    offset = (offset + s.bytes.size() + 7) & ~uint64_t{7};
+    toc.bytes.insert(toc.bytes.end(), s.tag, s.tag + 4);
+    toc.put(uint32_t{0});
+    toc.put(offset);
+    toc.put(static_cast<uint64_t>(s.out.bytes.size()));
+    toc.put(fnv1a(s.out.bytes.data(), s.out.bytes.size()));
+    offset = (offset + s.out.bytes.size() + 7) & ~uint64_t{7};
   }
-  std::vector<uint8_t> out;
-  out.reserve(offset);
-  out.insert(out.end(), kMagic, kMagic + 8);
-  put(out, kVersion);
-  put(out, static_cast<uint32_t>(sections.size()));
-  put(out, offset);
-  put(out, fnv1a(toc.data(), toc.size()));
-  put(out, uint64_t{0});
-  out.insert(out.end(), toc.begin(), toc.end());
-  out.resize(first_offset, 0);
+  ByteWriter file;
+  file.bytes.reserve(offset);
+  file.bytes.insert(file.bytes.end(), kMagic, kMagic + 8);
+  file.put(kVersion);
+  file.put(static_cast<uint32_t>(sections.size()));
+  file.put(offset);
+  file.put(fnv1a(toc.bytes.data(), toc.bytes.size()));
+  file.put(uint64_t{0});
+  file.bytes.insert(file.bytes.end(), toc.bytes.begin(), toc.bytes.end());
+  file.bytes.resize(first_offset, 0);
   for (const Section& s : sections) {
-    out.insert(out.end(), s.bytes.begin(), s.bytes.end());
-    out.resize((out.size() + 7) & ~size_t{7}, 0);
+    file.bytes.insert(file.bytes.end(), s.out.bytes.begin(), s.out.bytes.end());
+    file.bytes.resize((file.bytes.size() + 7) & ~size_t{7}, 0);
   }
+  std::vector<uint8_t> out = std::move(file.bytes);
   if (report) {
     report->sections.clear();
     for (const Section& s : sections) {
       const std::string tag(s.tag, 4);
-      if (!report->sections.empty() && report->sections.back().first == tag) report->sections.back().second += s.bytes.size();
-      else report->sections.emplace_back(tag, s.bytes.size());
+      if (!report->sections.empty() && report->sections.back().first == tag) report->sections.back().second += s.out.bytes.size();
+      else report->sections.emplace_back(tag, s.out.bytes.size());
     }
     report->binary_bytes = out.size();
     report->cells = cells;
@@ -313,8 +300,8 @@ WebExportReport writeWebExport(const World& world, const std::string& dir, const
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir)) throw Error(dir + ": cannot create the export folder");
   const std::filesystem::path root(dir);
-  // The binary is written before the page that names it, so a folder whose index.html is
-  // there holds a whole export of some run (each file is itself renamed into place whole).
+  // Each file is renamed into place whole; the binary first, so a first export's folder that
+  // holds index.html holds the data too.
   writeFileAtomically((root / "walkvis.bin").string(), bytes, "the web export");
   const std::string script = webDataScript(bytes);
   writeTextFileAtomically((root / "walkvis-data.js").string(), script, "the web export");

@@ -1,7 +1,8 @@
 // Small buildings whose floors the navmesh (walkable.h) derives: they leave Scene::levels empty.
 //  gen:table_room  one room with a table on four legs and chairs (solid seats with a back)
 //  gen:house       two storeys; a straight solid stair along the z = 0 wall rises through an
-//                  opening in the upper floor as long as the stair
+//                  opening in the upper floor, as long as the stair unless `opening` (m, measured
+//                  back from the top riser) is shorter: then the slab covers the lower treads
 //  gen:ramp        a low floor and a high floor joined by a ramp over the room's full width
 // Metres, y up. As in gen:office only what is seen from inside is modelled (docs/DESIGN.md, "Model only
 // what a scene needs"): floors facing up, ceilings down, walls into the room, furniture and stair
@@ -125,6 +126,10 @@ Scene generateHouse(GeneratorParams& params) {
   const double xe = xs + static_cast<double>(steps - 1) * tread;  // last riser, top of the stair
   if (xe > w - 1.0) throw Error(g + ": the stair (" + std::to_string(xe - xs) + " m) does not fit the width");
   if (sw > d - 2.0) throw Error(g + ": the stair is too wide for the depth");
+  // Up to the stair's length; a shorter opening leaves the lower treads under the slab, with
+  // less headroom the further up they are (FZK-Haus's spiral stair is built that way).
+  const double opening = params.getDouble("opening", xe - xs, 0.5, xe - xs);
+  const double xc = xe - opening;  // the slab's edge over the stair
   const double r = storey / static_cast<double>(steps);
   const double ceil0 = storey - slab, ceil1 = 2.0 * storey - slab;
   Scene scene;
@@ -133,15 +138,16 @@ Scene generateHouse(GeneratorParams& params) {
   // out of the ground floor (the stair block is solid) and of the slab (the opening).
   const std::array<std::array<double, 4>, 3> around = {{{0, w, sw, d}, {0, xs, 0, sw}, {xe, w, 0, sw}}};
   for (const auto& q : around) {
+    const double x1 = q[1] == xs ? xc : q[1];  // the slab reaches over the stair to xc
     out.rect({q[0], 0, q[2]}, {q[1], 0, q[3]}, {0, 1, 0}, kFloorColor);
-    out.rect({q[0], ceil0, q[2]}, {q[1], ceil0, q[3]}, {0, -1, 0}, kCeilingColor);
-    out.rect({q[0], storey, q[2]}, {q[1], storey, q[3]}, {0, 1, 0}, kFloorColor);
+    out.rect({q[0], ceil0, q[2]}, {x1, ceil0, q[3]}, {0, -1, 0}, kCeilingColor);
+    out.rect({q[0], storey, q[2]}, {x1, storey, q[3]}, {0, 1, 0}, kFloorColor);
   }
   out.rect({0, ceil1, 0}, {w, ceil1, d}, {0, -1, 0}, kCeilingColor);
   out.walls(0, w, 0, d, 0, ceil1);
   // The opening's edges (the one at x = xe is the last riser).
-  out.rect({xs, ceil0, 0}, {xs, storey, sw}, {1, 0, 0}, kSlabColor);
-  out.rect({xs, ceil0, sw}, {xe, storey, sw}, {0, 0, -1}, kSlabColor);
+  out.rect({xc, ceil0, 0}, {xc, storey, sw}, {1, 0, 0}, kSlabColor);
+  out.rect({xc, ceil0, sw}, {xe, storey, sw}, {0, 0, -1}, kSlabColor);
   // The stair: treads, risers and the open side, then the block's back under the slab.
   for (int64_t k = 1; k <= steps; ++k) {
     const double x0 = xs + static_cast<double>(k - 1) * tread, x1 = x0 + tread;

@@ -173,15 +173,19 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
   const glm::dvec3 size = b.hi - b.lo;
 
   // Cell size: a third of the radius (Recast's advice: erosion of ~3 cells), the grid kept under
-  // kMaxColumns. Cell height: a quarter of the climb, so a step is resolved in 4 voxels, kept
-  // under Recast's 13-bit span heights.
+  // kMaxColumns. Cell height: an eighth of the climb, kept under Recast's 13-bit span heights.
+  // Headroom is what the height costs: a floor's top rounds up and a ceiling's underside down to
+  // whole voxels, and the agent's height up, so a gap reads up to 3 cell heights lower than it is
+  // (0.13 m at a 1.7 m eye; at a quarter of the climb it was 0.26 m, which shut stairs whose
+  // slab edge leaves the walker a few centimetres). Spans are solid runs, so a finer height costs
+  // no memory, only Recast's 13 bits.
   double cs = radius > 0.0 ? radius / 3.0 : 0.05 * eye;
   cs = std::max(cs, std::sqrt(std::max(size.x, 1e-300) * std::max(size.z, 1e-300) / kMaxColumns));
   cs = std::max({cs, size.x / 4000.0, size.z / 4000.0});  // also under 4000 cells on a side
-  double ch = climb > 0.0 ? climb / 4.0 : agent_height / 20.0;
+  double ch = climb > 0.0 ? climb / 8.0 : agent_height / 40.0;
   ch = std::max(ch, (size.y + agent_height) / (RC_SPAN_MAX_HEIGHT - 64));
   const int walk_height = std::max(3, static_cast<int>(std::ceil(agent_height / ch)));
-  const int walk_climb = static_cast<int>(std::floor(climb / ch + 1e-9));  // 1e-9: climb = 4 ch exactly
+  const int walk_climb = static_cast<int>(std::floor(climb / ch + 1e-9));  // 1e-9: climb = 8 ch exactly
   const int walk_radius = std::min(254, static_cast<int>(std::ceil(radius / cs - 1e-9)));
   const int width = static_cast<int>(std::ceil(size.x / cs)) + 2;  // a cell of margin on each side
   const int depth = static_cast<int>(std::ceil(size.z / cs)) + 2;
@@ -223,7 +227,6 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
   rcFilterWalkableLowHeightSpans(&ctx, walk_height, *hf);
   if (!rcBuildCompactHeightfield(&ctx, walk_height, walk_climb, *hf, *chf))
     throw Error(scene.name + ": Recast could not build the compact heightfield");
-  hf.reset();
   if (walk_radius > 0 && !rcErodeWalkableArea(&ctx, walk_radius, *chf))
     throw Error(scene.name + ": Recast could not erode the walkable area");
 
@@ -355,10 +358,13 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
     if (span_area[i] >= 0) area_region[span_area[i]] = span_region[i];
   // Seed regions: the one of the largest area, and that of every area of at least the minimum
   // that is walled rather than a ledge. Walking outwards from each edge of the area (through its
-  // own eroded rim and through columns without open space), the first column that differs
-  // decides: open space at the area's height over a floor more than a climb below is a drop (the
-  // edge of a table top, a roof); otherwise an obstacle, or headroom too low to stand, rises there
-  // (a wall, a closed door: rooms of real models are often shut by their door leaves).
+  // own eroded rim) over the solid heightfield, the first column without standing room at the
+  // area's height decides: open space at that height over a floor more than a climb below, or
+  // over nothing, is a drop (the edge of a table top or a bed, a roof); solid there, or headroom
+  // too low to stand, is a wall (a wall, a closed door: rooms of real models are often shut by
+  // their door leaves). The solid heightfield, not the open one: beside a bed the floor's column
+  // holds the bed's side face, rasterized over the cell it touches, so that column has no open
+  // span; the open field would show only the storey above there and call it a wall.
   std::vector<char> region_seed(regions, 0);
   if (largest >= 0) region_seed[area_region[largest]] = 1;
   {
@@ -376,16 +382,13 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
         for (int k = 1; k <= reach; ++k) {
           const int x = span_x[i] + k * dx, z = span_z[i] + k * dz;
           if (x < 0 || z < 0 || x >= width || z >= depth) break;
-          const rcCompactCell& c = chf->cells[x + z * width];
-          if (c.count == 0) continue;  // solid, or only spans filtered out: look further
-          bool level_here = false, below = false;
-          for (int j = static_cast<int>(c.index), e = j + static_cast<int>(c.count); j < e; ++j) {
-            const int fj = chf->spans[j].y;
-            // h saturates at 255 cells: then the open space reaches the next span or the sky.
-            const int top = chf->spans[j].h < 255 ? fj + static_cast<int>(chf->spans[j].h)
-                                                  : (j + 1 < e ? chf->spans[j + 1].y : INT32_MAX);
-            if (std::abs(fj - f) <= walk_climb) level_here = true;
-            else if (fj < f - walk_climb && top > f) below = true;  // open down to a lower floor
+          const rcSpan* column = hf->spans[x + z * width];
+          bool level_here = false, below = column == nullptr;  // an empty column: open to nothing
+          for (const rcSpan* sp = column; sp; sp = sp->next) {
+            const int bot = static_cast<int>(sp->smax);  // a gap from this solid's top to the next's bottom
+            const int top = sp->next ? static_cast<int>(sp->next->smin) : INT32_MAX;
+            if (std::abs(bot - f) <= walk_climb) level_here = level_here || top - bot >= walk_height;
+            else if (bot < f - walk_climb && top > f) below = true;  // open down to a lower floor
           }
           if (level_here) continue;
           (below ? drops : walls)[a]++;
@@ -396,6 +399,7 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
     for (size_t a = 0; a < area_spans.size(); ++a)
       if (area_spans[a] * cell_area >= min_area && walls[a] > drops[a]) region_seed[area_region[a]] = 1;
   }
+  hf.reset();
   const auto seeded = [&](int a) { return area_region[a] >= 0 && region_seed[area_region[a]]; };
 
   // Levels: big areas in seeded regions; one level per candidate height.

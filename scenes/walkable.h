@@ -12,8 +12,10 @@ namespace walkvis {
 // Replaces scene.levels and scene.connections from the scene's polygons. Options with a negative
 // value take the defaults stated in scene.h (from scene.eye_height).
 //  * Voxels: cell size agent radius / 3 (coarser if the grid would pass 4M columns or 4000 cells a
-//    side), cell height max climb / 4; Recast's filters for low obstacles, ledges and headroom, and
-//    erosion by the radius.
+//    side), cell height max climb / 8 (a gap reads up to 3 cell heights lower than it is);
+//    Recast's filters for low obstacles, ledges and headroom, and erosion by the radius. Recast
+//    links two cells when the gap they share is the agent's height: a stair whose tread steps
+//    out from under a slab needs the headroom at the slab's edge, not only over each tread.
 //  * An area is a Recast-linked set of walkable cells whose floor is one candidate height (the
 //    exact upward horizontal faces; heights within 1e-6 of the scene's size are one) and which
 //    those faces cover.

@@ -179,6 +179,37 @@ TEST(Walkable, HouseHasTwoLevelsJoinedByItsStair) {
   EXPECT_TRUE(notes);
 }
 
+// A stair that climbs out from under the slab (FZK-Haus's spiral stair does: its attic slab covers
+// the treads up to 0.88 m, 1.62 m under the slab). gen:house?opening=2.52 leaves the slab over the
+// first six treads (to x = 2.68, the sixth riser's top at 1.125 m); stepping onto the seventh
+// tread (1.3125 m) beside the slab's edge (2.8 m) leaves 1.4875 m. An agent taller than that
+// cannot pass, one lower by more than the voxels' 3 cell heights (0.13 m) can.
+TEST(Walkable, StairOutFromUnderASlabJoinsOnlyAgentsItsHeadroomAdmits) {
+  const auto joined = [](const Scene& s) {
+    for (const auto& c : s.connections)
+      if (c.levels == std::vector<uint32_t>{0, 1}) return true;
+    return false;
+  };
+  for (const double h : {2.04, 1.6}) {
+    WalkableOptions w;
+    w.agent_height = h;
+    const Scene s = navmesh("gen:house?opening=2.52", w);
+    ASSERT_EQ(s.levels.size(), 2u) << h;
+    EXPECT_FALSE(joined(s)) << "agent height " << h;
+    EXPECT_FALSE(s.connections.empty()) << h;  // the treads at each end are still connections
+  }
+  WalkableOptions low;
+  low.agent_height = 1.3;
+  EXPECT_TRUE(joined(navmesh("gen:house?opening=2.52", low)));
+  // With 2.24 m over the highest covered tread and 2.05 m at the edge (opening 3.5: the slab
+  // ends over the third tread), the default 2.04 m agent is within the voxels' 0.13 m and may go
+  // either way; 1.9 m must pass.
+  WalkableOptions tall;
+  tall.agent_height = 1.9;
+  EXPECT_TRUE(joined(navmesh("gen:house?opening=3.5", tall)));
+  EXPECT_TRUE(joined(navmesh("gen:house")));  // the whole opening: the default agent passes
+}
+
 TEST(Walkable, RampJoinsTwoFloors) {
   const Scene s = navmesh("gen:ramp");
   ASSERT_EQ(s.levels.size(), 2u);

@@ -129,19 +129,23 @@ Scene generateHouse(GeneratorParams& params) {
   // Up to the stair's length; a shorter opening leaves the lower treads under the slab, with
   // less headroom the further up they are (FZK-Haus's spiral stair is built that way).
   const double opening = params.getDouble("opening", xe - xs, 0.5, xe - xs);
-  const double xc = xe - opening;  // the slab's edge over the stair
+  const double xc = xs + ((xe - xs) - opening);  // the slab's edge over the stair; xs exactly by default
   const double r = storey / static_cast<double>(steps);
   const double ceil0 = storey - slab, ceil1 = 2.0 * storey - slab;
   Scene scene;
   Out out(scene, g);
   // Ground floor and its ceiling, the upper floor and its ceiling; the stair's footprint is cut
   // out of the ground floor (the stair block is solid) and of the slab (the opening).
-  const std::array<std::array<double, 4>, 3> around = {{{0, w, sw, d}, {0, xs, 0, sw}, {xe, w, 0, sw}}};
-  for (const auto& q : around) {
-    const double x1 = q[1] == xs ? xc : q[1];  // the slab reaches over the stair to xc
+  // The slab's pieces are the ground floor's but for the one before the stair, which reaches to xc.
+  using Rects = std::array<std::array<double, 4>, 3>;
+  const Rects ground = {{{0, w, sw, d}, {0, xs, 0, sw}, {xe, w, 0, sw}}};
+  const Rects slab_around = {{{0, w, sw, d}, {0, xc, 0, sw}, {xe, w, 0, sw}}};
+  for (size_t i = 0; i < ground.size(); ++i) {
+    const auto& q = ground[i];
+    const auto& u = slab_around[i];
     out.rect({q[0], 0, q[2]}, {q[1], 0, q[3]}, {0, 1, 0}, kFloorColor);
-    out.rect({q[0], ceil0, q[2]}, {x1, ceil0, q[3]}, {0, -1, 0}, kCeilingColor);
-    out.rect({q[0], storey, q[2]}, {x1, storey, q[3]}, {0, 1, 0}, kFloorColor);
+    out.rect({u[0], ceil0, u[2]}, {u[1], ceil0, u[3]}, {0, -1, 0}, kCeilingColor);
+    out.rect({u[0], storey, u[2]}, {u[1], storey, u[3]}, {0, 1, 0}, kFloorColor);
   }
   out.rect({0, ceil1, 0}, {w, ceil1, d}, {0, -1, 0}, kCeilingColor);
   out.walls(0, w, 0, d, 0, ceil1);

@@ -178,7 +178,7 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
   // whole voxels, and the agent's height up, so a gap reads up to 3 cell heights lower than it is
   // (0.13 m at a 1.7 m eye; at a quarter of the climb it was 0.26 m, which shut stairs whose
   // slab edge leaves the walker a few centimetres). Spans are solid runs, so a finer height costs
-  // no memory, only Recast's 13 bits.
+  // hardly any memory, only Recast's 13 bits.
   double cs = radius > 0.0 ? radius / 3.0 : 0.05 * eye;
   cs = std::max(cs, std::sqrt(std::max(size.x, 1e-300) * std::max(size.z, 1e-300) / kMaxColumns));
   cs = std::max({cs, size.x / 4000.0, size.z / 4000.0});  // also under 4000 cells on a side
@@ -383,7 +383,8 @@ void deriveWalkableLevels(Scene& scene, const WalkableOptions& options) {
           const int x = span_x[i] + k * dx, z = span_z[i] + k * dz;
           if (x < 0 || z < 0 || x >= width || z >= depth) break;
           const rcSpan* column = hf->spans[x + z * width];
-          bool level_here = false, below = column == nullptr;  // an empty column: open to nothing
+          // Open to nothing below the lowest solid (or in an empty column) counts as a drop too.
+          bool level_here = false, below = column == nullptr || static_cast<int>(column->smin) > f;
           for (const rcSpan* sp = column; sp; sp = sp->next) {
             const int bot = static_cast<int>(sp->smax);  // a gap from this solid's top to the next's bottom
             const int top = sp->next ? static_cast<int>(sp->next->smin) : INT32_MAX;

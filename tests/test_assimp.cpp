@@ -121,7 +121,7 @@ TEST(Assimp, FzkHausIsAHouseInYUpMetres) {
 // open sides are drops to the floor. The navmesh once read them as walls (the floor's column
 // beside the bed held only the bed's rasterized side face) and made the bed a level at <= 1.9 m.
 // The spiral stair joins nothing: the attic slab covers its treads up to 0.88 m (1.62 m of
-// headroom), and its going between the post and the handrail is about 0.7 m.
+// headroom), and its treads are about 0.75 m long between the post and the handrail.
 TEST(Assimp, FzkHausLevelsAreItsStoreysForWalkersFrom1p6To2p04) {
   if (!fs::exists(kHaus)) GTEST_SKIP() << kHaus << " absent (Debian package assimp-testmodels)";
   double attic_area = 0.0;

@@ -1,5 +1,6 @@
 // Navmesh floors (walkable.h): a table top is no level, the floor around it is; a house's two
-// storeys are levels joined by its stair; a ramp joins two floors; walkable pieces are convex, on
+// storeys are levels joined by its stair, which joins only agents its headroom admits when it
+// climbs out from under the slab; a ramp joins two floors; walkable pieces are convex, on
 // the scene's floor faces and an agent radius from the walls; bad options are SceneErrors.
 #include <algorithm>
 #include <cmath>

@@ -133,7 +133,9 @@ bool Walker::insidePiece(const Piece& p, double x, double z) const {
     const glm::dvec2 u = ring[k], w = ring[(k + 1) % ring.size()];
     const glm::dvec2 e = w - u;
     const double c = e.x * (z - u.y) - e.y * (x - u.x);
-    const double slack = tol_ * std::hypot(e.x, e.y);
+    // sqrt of the sum, not hypot: coordinates are far from overflow, and the web viewer computes
+    // the same bits without Math.hypot, which allocates in V8 (walkthrough/web/viewer.js).
+    const double slack = tol_ * std::sqrt(e.x * e.x + e.y * e.y);
     if (c < -slack) neg = true;
     if (c > slack) pos = true;
   }

@@ -5,7 +5,9 @@
 //   moves   Walker::move from recorded states: the same level, the eye within 1e-9 of the scene's
 //           scale (std::hypot and Math.hypot may round differently in the last bit)
 //   places  Walker::place: the same
-// Prints one summary line; exit status 0 when everything agrees, 1 otherwise.
+//   alloc   200,000 moves and frame orders into one state and list: at most one young-generation
+//           collection per 5,000 (the page's frame loop allocates nothing)
+// Prints one summary line per part; exit status 0 when everything agrees, 1 otherwise.
 'use strict';
 const fs = require('fs');
 const path = require('path');
@@ -48,7 +50,34 @@ expected.places.forEach((p, i) => {
   if (got.level !== p.to.level || !near(got.eye, p.to.eye)) fail('place ' + i + ': level ' + got.level + ', C++ ' + p.to.level);
 });
 
+// A frame allocates nothing: the page walks and orders into states and lists it keeps. V8 still
+// boxes a few doubles that cross calls, so the check counts young-generation collections, which
+// garbage brings: the walker before it reused its scratch had 1 per 100 to 300 moves of this loop.
+const kGcMoves = 200000;
+const { PerformanceObserver, constants } = require('perf_hooks');
+let minor_gcs = 0;
+const gcObserver = new PerformanceObserver((list) => {
+  for (const e of list.getEntries()) if (e.detail && e.detail.kind === constants.NODE_PERFORMANCE_GC_MINOR) ++minor_gcs;
+});
+const walkLoop = (n) => {
+  const state = walker.place(expected.places.length ? expected.places[0].eye : scene.meta.start.eye);
+  for (let i = 0; i < n; ++i) {
+    const m = expected.moves[i % expected.moves.length];
+    walker.move(state, m.d[0], m.d[1], state);
+    W.frameOrder(scene, state.eye, order);
+  }
+};
+
+function finish() {
 console.log('parity: ' + expected.orders.length + ' orders (' + hfd + ' from HFD trees, ' + ids + ' ids), ' +
             expected.moves.length + ' moves (' + blocked + ' blocked, ' + level_changes + ' level changes), ' +
             expected.places.length + ' places: ' + failures + ' mismatches');
+console.log('allocation: ' + kGcMoves + ' moves and frame orders into one state and list: ' + minor_gcs + ' young-generation collections');
+if (minor_gcs > kGcMoves / 5000) fail('the walk allocates: ' + minor_gcs + ' collections (at most ' + kGcMoves / 5000 + ')');
 process.exit(failures === 0 ? 0 : 1);
+}
+
+walkLoop(kGcMoves / 10);  // compiled before counting
+gcObserver.observe({ entryTypes: ['gc'] });
+walkLoop(kGcMoves);
+setTimeout(finish, 50);  // gc entries arrive asynchronously

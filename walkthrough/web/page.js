@@ -4,8 +4,10 @@
 //
 // URL: ?frame=K (key K of the stored tour) or ?eye=x,y,z&yaw=Y&pitch=P draws one view and sets
 // body[data-drawn]; &size=WxH (default 640x480), &ids=1 (fragment index + 1 as RGB), &wire=1,
-// &rejected=1, &overlay=1. ?bench=K draws tour keys 0..K-1 &reps=R times and writes the median
-// frame time into body[data-bench]. Otherwise: the walkthrough, WASD, Shift, mouse look (click).
+// &rejected=1, &overlay=1. ?bench=K draws tour keys 0..K-1 &reps=R times in four runs (the floor,
+// the z-buffer, the BSP order, the HFD order) and writes their medians, split into order, GL calls
+// and the wait for the rasteriser, into body[data-bench]. Otherwise: the walkthrough, WASD, Shift,
+// mouse look (click).
 'use strict';
 
 (function () {
@@ -139,7 +141,8 @@ void main() {
       this.fanStart[n] = fans;
       this.edgeStart[n] = edges;
       this.relative = new Float32Array(3 * nv);
-      this.lastEye = null;
+      this.lastEye = [NaN, NaN, NaN];
+      this.clip = new Float32Array(16);
       this.frameIdx = new Uint32Array(Math.max(fans, edges, 3));
 
       this.program = this.link();
@@ -193,7 +196,8 @@ void main() {
     // Positions relative to the eye, subtracted in doubles and rounded to float as uploadEyeRelative
     // does: far from the origin (Doom maps) float positions would shake.
     updatePositions(eye) {
-      if (this.lastEye && this.lastEye[0] === eye[0] && this.lastEye[1] === eye[1] && this.lastEye[2] === eye[2]) return;
+      const last = this.lastEye;
+      if (last[0] === eye[0] && last[1] === eye[1] && last[2] === eye[2]) return;
       const v = this.scene.vertices, r = this.relative;
       for (let k = 0; k < r.length; k += 3) {
         r[k] = v[k] - eye[0];
@@ -203,7 +207,7 @@ void main() {
       const gl = this.gl;
       gl.bindBuffer(gl.ARRAY_BUFFER, this.posBuf);
       gl.bufferSubData(gl.ARRAY_BUFFER, 0, r);
-      this.lastEye = eye.slice();
+      last[0] = eye[0], last[1] = eye[1], last[2] = eye[2];
     }
 
     // A list that names a fragment twice outgrows the one-of-each capacity: grow, never per frame.
@@ -229,19 +233,25 @@ void main() {
 
     // Draws order.ids[0, order.n); with `rejected`, then the fragments left out that face the eye
     // in the marker colour (the window's "show rejected"). Returns the rejected count drawn.
-    draw(cam, order, style) {
+    // With `zbuffer`, the depth test on (the reference frame of `?bench`: every fragment, any order).
+    draw(cam, order, style, zbuffer = false) {
       const gl = this.gl, sc = this.scene;
       this.updatePositions(cam.eye);
       gl.viewport(0, 0, cam.width, cam.height);
       if (style.ids) gl.clearColor(0, 0, 0, 1);
       else gl.clearColor(0.12, 0.13, 0.16, 1);
       gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-      gl.disable(gl.DEPTH_TEST);
+      if (zbuffer) {
+        gl.enable(gl.DEPTH_TEST);
+        gl.depthFunc(gl.LESS);
+      } else {
+        gl.disable(gl.DEPTH_TEST);
+      }
       gl.disable(gl.CULL_FACE);
       gl.disable(gl.BLEND);
       gl.disable(gl.DITHER);  // ids must reach the buffer bit-exact
       gl.useProgram(this.program);
-      gl.uniformMatrix4fv(this.clipLoc, false, W.clipMatrix(cam));
+      gl.uniformMatrix4fv(this.clipLoc, false, W.clipMatrix(cam, this.clip));
       gl.uniform1i(this.styleLoc, style.ids ? 1 : 0);
       gl.uniform1i(this.markerLoc, 0);
       gl.bindVertexArray(this.vao);
@@ -277,9 +287,11 @@ void main() {
     return [+m[1], +m[2]];
   }
 
-  function camera(scene, eye, yaw, pitch, width, height) {
-    const c = scene.meta.camera;
-    return { eye, yaw, pitch, fov_y: c.fov_y, near: c.near, far: c.far, width, height };
+  // One camera and one frame record per page, refilled each frame: a frame allocates nothing.
+  function setCamera(cam, eye, yaw, pitch, width, height) {
+    cam.eye[0] = eye[0], cam.eye[1] = eye[1], cam.eye[2] = eye[2];
+    cam.yaw = yaw, cam.pitch = pitch, cam.width = width, cam.height = height;
+    return cam;
   }
 
   function overlayText(scene, stats) {
@@ -300,7 +312,7 @@ void main() {
   }
 
   function start(scene) {
-    const gl = canvas.getContext('webgl2', { antialias: false, alpha: false, depth: false, preserveDrawingBuffer: true });
+    const gl = canvas.getContext('webgl2', { antialias: false, alpha: false, depth: true, preserveDrawingBuffer: true });
     if (!gl) throw new Error('this browser has no WebGL2');
     const renderer = new Renderer(gl, scene);
     const walker = new W.Walker(scene);
@@ -326,13 +338,29 @@ void main() {
       return null;
     })();
 
-    const drawView = (eye, yaw, pitch, width, height) => {
-      const cam = camera(scene, eye, yaw, pitch, width, height);
-      const t0 = performance.now();
-      W.frameOrder(scene, eye, order);
-      const t1 = performance.now();
-      const rejected = renderer.draw(cam, order, style);
-      return { order, order_ms: t1 - t0, t0, rejected };
+    const c = scene.meta.camera;
+    const cam = { eye: [0, 0, 0], yaw: 0, pitch: 0, fov_y: c.fov_y, near: c.near, far: c.far, width: 1, height: 1 };
+    const drawn = { order, order_ms: 0, t0: 0, t1: 0, t2: 0, rejected: 0 };
+    // Fixed orders for ?bench's other runs: every fragment (the z-buffer) and none (the floor).
+    const all = W.makeOrder(scene), none = W.makeOrder(scene);
+    for (let f = 0; f < scene.meta.fragments; ++f) all.ids[f] = f;
+    all.n = scene.meta.fragments;
+    // t0 → t1 the order, t1 → t2 the GL calls (the rasteriser may still be working at t2). `run`:
+    // 'hfd' (the frame's order, what the walkthrough draws), 'bsp' (the BSP's back-to-front order
+    // everywhere), 'zbuffer' (every fragment, depth test on) or 'floor' (nothing drawn).
+    const drawView = (eye, yaw, pitch, width, height, run = 'hfd') => {
+      setCamera(cam, eye, yaw, pitch, width, height);
+      drawn.t0 = performance.now();
+      let o = order;
+      if (run === 'hfd') W.frameOrder(scene, eye, order);
+      else if (run === 'bsp') order.n = 0, W.bspOrder(scene, eye, order);
+      else o = run === 'zbuffer' ? all : none;
+      drawn.order = o;
+      drawn.t1 = performance.now();
+      drawn.rejected = renderer.draw(cam, o, style, run === 'zbuffer');
+      drawn.t2 = performance.now();
+      drawn.order_ms = drawn.t1 - drawn.t0;
+      return drawn;
     };
 
     if (params.has('bench')) {
@@ -341,22 +369,38 @@ void main() {
       canvas.style.width = w + 'px', canvas.style.height = h + 'px';
       overlayEl.style.display = 'none';
       const keys = Math.min(Number(params.get('bench')) || 20, tour.length), reps = Math.max(Number(params.get('reps')) || 5, 1);
+      // Each run draws the keys in turn, every frame finished by a one-pixel read-back (which waits
+      // for the rasteriser); runs rotate their order each repetition, so that drift in the machine's
+      // speed falls on all alike. The floor is what a frame costs with nothing drawn.
+      const runs = ['floor', 'zbuffer', 'bsp', 'hfd'];
       const pixel = new Uint8Array(4);
-      const times = [], drawn = [];
+      const rec = {};
+      for (const run of runs) rec[run] = { total: [], order: [], submit: [], wait: [], drawn: 0 };
       for (let r = 0; r < reps; ++r) {
-        for (let k = 0; k < keys; ++k) {
-          const key = tour[k];
-          const d = drawView([key[1], key[2], key[3]], key[4], key[5], w, h);
-          gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);  // waits for the frame
-          times.push(performance.now() - d.t0);
-          if (r === 0) drawn.push(d.order.n);
+        for (let j = 0; j < runs.length; ++j) {
+          const run = runs[(j + r) % runs.length], m = rec[run];
+          for (let k = 0; k < keys; ++k) {
+            const key = tour[k];
+            const d = drawView([key[1], key[2], key[3]], key[4], key[5], w, h, run);
+            gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+            const t3 = performance.now();
+            m.total.push(t3 - d.t0), m.order.push(d.t1 - d.t0), m.submit.push(d.t2 - d.t1), m.wait.push(t3 - d.t2);
+            if (r === 0) m.drawn += d.order.n / keys;
+          }
         }
       }
-      times.sort((a, b) => a - b);
-      const median = times[Math.floor(times.length / 2)];
-      const mean_drawn = drawn.reduce((a, b) => a + b, 0) / drawn.length;
-      document.body.dataset.bench = JSON.stringify({ keys, reps, frame_ms_median: median, drawn_mean: mean_drawn,
-                                                     fragments: scene.meta.fragments, width: w, height: h });
+      const median = (a) => { const b = a.slice().sort((x, y) => x - y); return b[Math.floor(b.length / 2)]; };
+      const modes = {};
+      for (const run of runs) {
+        const m = rec[run];
+        modes[run] = { frame_ms_median: median(m.total), order_ms_median: median(m.order), submit_ms_median: median(m.submit),
+                       wait_ms_median: median(m.wait), drawn_mean: m.drawn };
+      }
+      const hfd = modes.hfd;
+      document.body.dataset.bench = JSON.stringify({
+        keys, reps, width: w, height: h, fragments: scene.meta.fragments,
+        frame_ms_median: hfd.frame_ms_median, drawn_mean: hfd.drawn_mean, floor_ms_median: modes.floor.frame_ms_median,
+        hfd_speedup: modes.zbuffer.frame_ms_median / hfd.frame_ms_median, modes });
       document.body.dataset.drawn = '1';
       document.title = 'walkvis: bench done';
       return;
@@ -425,7 +469,7 @@ void main() {
       if (len > 0 && dt > 0) {
         const run = keys.has('ShiftLeft') || keys.has('ShiftRight');
         const step = walk.speed * (run ? walk.run_factor : 1) * dt / len;
-        state = walker.move(state, wx * step, wz * step);
+        walker.move(state, wx * step, wz * step, state);
       }
       const d = drawView(state.eye, yaw, pitch, canvas.width, canvas.height);
       const ms = performance.now() - d.t0;

@@ -402,7 +402,7 @@
   // A reusable frame list: no allocation per frame.
   function makeOrder(scene) {
     return { ids: new Uint32Array(Math.max(scene.meta.fragments, 1) * 2), n: 0, tests: 0, object_tests: 0,
-             stack: new Int32Array(2 * Math.max(scene.meta.bsp_nodes, 1) + 2), level: -1, used: 'bsp' };
+             stack: new Int32Array(2 * Math.max(scene.meta.bsp_nodes, 1) + 2), on: [0, 0, 0], level: -1, used: 'bsp' };
   }
 
   // FrameBuilder::build for mode hfd, culling none: the fragments of the frame, first drawn first.
@@ -415,7 +415,8 @@
     const l = levelAt(scene, eye);
     if (l >= 0) {
       const level = scene.levels[l];
-      const on = [eye[0], level.height, eye[2]];  // snap the few ulps a decimal path adds
+      const on = out.on;  // the eye snapped onto the height plane: the few ulps a decimal path adds
+      on[0] = eye[0], on[1] = level.height, on[2] = eye[2];
       const t = findCell(level, on);
       if (t && t.nodes.length > 0) {
         hfdQuery(t, on, out);
@@ -432,10 +433,52 @@
   // ---- walking (walkthrough/movement.cpp) ---------------------------------------------------
   const kWallMaxNormalY = 0.9;
 
-  const dot3 = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-  const sub3 = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-  const cross3 = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-  const len3 = (a) => Math.sqrt(dot3(a, a));
+  // The walker's arithmetic reads vertices in place (sc.vertices, a fragment's run of x, y, z) and
+  // writes into the walker's own scratch: a frame's moves allocate nothing. Each expression keeps
+  // the C++ operation order (glm's dot, cross and length), so results agree to the last bit where
+  // Math.hypot is not involved.
+
+  // pointInPolygon (movement.cpp): q within tol of the inside of every edge of the fragment's ring.
+  function pointInPolygon(vs, first, count, pl, f, q, tol) {
+    const nx = pl[4 * f], ny = pl[4 * f + 1], nz = pl[4 * f + 2], qx = q[0], qy = q[1], qz = q[2];
+    for (let i = 0; i < count; ++i) {
+      const a = 3 * (first + i), b = 3 * (first + (i + 1) % count);
+      const ex = vs[b] - vs[a], ey = vs[b + 1] - vs[a + 1], ez = vs[b + 2] - vs[a + 2];
+      const wx = qx - vs[a], wy = qy - vs[a + 1], wz = qz - vs[a + 2];
+      const c = (ey * wz - ez * wy) * nx + (ez * wx - ex * wz) * ny + (ex * wy - ey * wx) * nz;
+      if (c < -tol * Math.sqrt(ex * ex + ey * ey + ez * ez)) return false;
+    }
+    return true;
+  }
+
+  // pointPolygonDistance (movement.cpp): the distance from p to the fragment's polygon.
+  // q is scratch for the foot of p on the plane.
+  function pointPolygonDistance(vs, first, count, pl, f, p, q, tol) {
+    const nx = pl[4 * f], ny = pl[4 * f + 1], nz = pl[4 * f + 2], d = pl[4 * f + 3], px = p[0], py = p[1], pz = p[2];
+    const s = nx * px + ny * py + nz * pz - d;
+    q[0] = px - s * nx, q[1] = py - s * ny, q[2] = pz - s * nz;
+    if (pointInPolygon(vs, first, count, pl, f, q, tol)) return Math.abs(s);
+    let best = Infinity;
+    for (let i = 0; i < count; ++i) {
+      const a = 3 * (first + i), b = 3 * (first + (i + 1) % count);
+      const ax = vs[a], ay = vs[a + 1], az = vs[a + 2];
+      const ex = vs[b] - ax, ey = vs[b + 1] - ay, ez = vs[b + 2] - az;
+      const ee = ex * ex + ey * ey + ez * ez;
+      const t = ee > 0 ? Math.min(Math.max(((px - ax) * ex + (py - ay) * ey + (pz - az) * ez) / ee, 0), 1) : 0;
+      const rx = px - (ax + t * ex), ry = py - (ay + t * ey), rz = pz - (az + t * ez);
+      best = Math.min(best, Math.sqrt(rx * rx + ry * ry + rz * rz));
+    }
+    return best;
+  }
+
+  function copyState(from, out) {
+    out.eye[0] = from.eye[0], out.eye[1] = from.eye[1], out.eye[2] = from.eye[2];
+    out.level = from.level;
+    return out;
+  }
+
+  // A walk state, {eye: [x, y, z], level}; pass one to move and place to reuse it.
+  function makeWalkState() { return { eye: [0, 0, 0], level: -1 }; }
 
   class Walker {
     constructor(scene) {
@@ -446,6 +489,14 @@
       this.step = m.walk.step;
       this.tol = m.walk.tol;
       this.pieces = [];
+      // Scratch for one move: the stack of blocks (a BSP node is pushed at most once, and so is
+      // each missing child), the floor found, the eyes tried, the blocker's normal.
+      this.stack = new Int32Array(2 * Math.max(m.bsp_nodes, 1) + 2);
+      this.floor = { y: 0, level: -1 };
+      this.mid = [0, 0, 0];
+      this.tried = makeWalkState();
+      this.normal = [0, 0, 0];
+      this.q = [0, 0, 0];
       const levels = scene.walk.levels, connections = scene.walk.connections;
       let lx = Infinity, lz = Infinity, hx = -Infinity, hz = -Infinity;
       const add = (ring, owner, index, patch) => {
@@ -494,7 +545,7 @@
         const u = r[k], w = r[(k + 1) % r.length];
         const ex = w[0] - u[0], ez = w[1] - u[1];
         const c = ex * (z - u[1]) - ez * (x - u[0]);
-        const slack = tol * Math.hypot(ex, ez);
+        const slack = tol * Math.sqrt(ex * ex + ez * ez);  // as movement.cpp: Math.hypot allocates
         if (c < -slack) neg = true;
         if (c > slack) pos = true;
       }
@@ -510,38 +561,40 @@
       return cz * this.nx + cx;
     }
 
-    // The highest floor at (x, z) at most max_y: {y, level} (level -1 on a connection patch).
+    // The highest floor at (x, z) at most max_y, into this.floor ({y, level}, level -1 on a
+    // connection patch); false when there is none.
     floorUnder(x, z, max_y) {
       const c = this.gridCell(x, z);
-      if (c < 0) return null;
-      let best = null;
-      for (const i of this.cells[c]) {
-        const p = this.pieces[i];
+      if (c < 0) return false;
+      let found = false;
+      const best = this.floor, list = this.cells[c];
+      for (let k = 0; k < list.length; ++k) {
+        const p = this.pieces[list[k]];
         const fy = this.pieceFloor(p, x, z);
         if (fy > max_y) continue;
         const level = p.patch ? -1 : p.level;
-        if (best && (best.y > fy || (best.y === fy && (best.level >= 0 || level < 0)))) continue;
-        if (this.insidePiece(p, x, z)) best = { y: fy, level };
+        if (found && (best.y > fy || (best.y === fy && (best.level >= 0 || level < 0)))) continue;
+        if (this.insidePiece(p, x, z)) found = true, best.y = fy, best.level = level;
       }
-      return best;
+      return found;
     }
 
     wallBlocks(f, a, b, radius) {
-      const sc = this.scene, tol = this.tol;
-      const n = [sc.frag_planes[4 * f], sc.frag_planes[4 * f + 1], sc.frag_planes[4 * f + 2]], d = sc.frag_planes[4 * f + 3];
-      if (!(Math.abs(n[1]) < kWallMaxNormalY)) return false;
-      const v = fragmentVertices(sc, f);
-      const sa = dot3(n, a) - d, sb = dot3(n, b) - d;
+      const sc = this.scene, tol = this.tol, pl = sc.frag_planes;
+      const nx = pl[4 * f], ny = pl[4 * f + 1], nz = pl[4 * f + 2], d = pl[4 * f + 3];
+      if (!(Math.abs(ny) < kWallMaxNormalY)) return false;
+      const vs = sc.vertices, first = sc.frag[4 * f], count = sc.frag[4 * f + 1];
+      const sa = nx * a[0] + ny * a[1] + nz * a[2] - d, sb = nx * b[0] + ny * b[1] + nz * b[2] - d;
       if ((sa > tol && sb < -tol) || (sa < -tol && sb > tol)) {
-        const t = sa / (sa - sb);
-        const p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])];
-        if (pointInPolygon(v, n, p, tol)) return true;
-      } else if (Math.abs(sb) <= tol && pointInPolygon(v, n, b, tol)) {
+        const t = sa / (sa - sb), q = this.q;
+        q[0] = a[0] + t * (b[0] - a[0]), q[1] = a[1] + t * (b[1] - a[1]), q[2] = a[2] + t * (b[2] - a[2]);
+        if (pointInPolygon(vs, first, count, pl, f, q, tol)) return true;
+      } else if (Math.abs(sb) <= tol && pointInPolygon(vs, first, count, pl, f, b, tol)) {
         return true;
       }
       if (radius > 0 && Math.abs(sb) < radius) {
-        const db = pointPolygonDistance(v, n, d, b, tol);
-        if (db < radius && db < pointPolygonDistance(v, n, d, a, tol) - tol) return true;
+        const db = pointPolygonDistance(vs, first, count, pl, f, b, this.q, tol);
+        if (db < radius && db < pointPolygonDistance(vs, first, count, pl, f, a, this.q, tol) - tol) return true;
       }
       return false;
     }
@@ -551,16 +604,18 @@
       const sc = this.scene, tol = this.tol;
       const root = sc.meta.bsp_root;
       if (root < 0) return false;
-      const stack = [root];
-      while (stack.length > 0) {
-        const ni = stack.pop();
+      const stack = this.stack, planes = sc.bsp_planes, nodes = sc.bsp_nodes;
+      let top = 0;
+      stack[top++] = root;
+      while (top > 0) {
+        const ni = stack[--top];
         if (ni < 0) continue;
-        const pl = sc.bsp_planes.subarray(4 * ni, 4 * ni + 4);
-        const sa = pl[0] * a[0] + pl[1] * a[1] + pl[2] * a[2] - pl[3];
-        const sb = pl[0] * b[0] + pl[1] * b[1] + pl[2] * b[2] - pl[3];
+        const q = 4 * ni;
+        const sa = planes[q] * a[0] + planes[q + 1] * a[1] + planes[q + 2] * a[2] - planes[q + 3];
+        const sb = planes[q] * b[0] + planes[q + 1] * b[1] + planes[q + 2] * b[2] - planes[q + 3];
         const lo = Math.min(sa, sb - radius) - tol, hi = Math.max(sa, sb + radius) + tol;
         if (lo <= 0 && hi >= 0) {
-          const first = sc.bsp_nodes[4 * ni + 2], count = sc.bsp_nodes[4 * ni + 3];
+          const first = nodes[q + 2], count = nodes[q + 3];
           for (let f = first; f < first + count; ++f) {
             if (this.wallBlocks(f, a, b, radius)) {
               if (blocker) { blocker[0] = sc.frag_planes[4 * f]; blocker[1] = sc.frag_planes[4 * f + 1]; blocker[2] = sc.frag_planes[4 * f + 2]; }
@@ -568,116 +623,86 @@
             }
           }
         }
-        if (hi > 0) stack.push(sc.bsp_nodes[4 * ni]);
-        if (lo < 0) stack.push(sc.bsp_nodes[4 * ni + 1]);
+        if (hi > 0) stack[top++] = nodes[q];
+        if (lo < 0) stack[top++] = nodes[q + 1];
       }
       return false;
     }
 
     segmentClear(a, b, radius, blocker) { return !this.blocks(a, b, radius, blocker); }
 
-    place(eye) {
-      const floor = this.floorUnder(eye[0], eye[2], eye[1] - this.eye_height + this.step + this.tol);
-      if (!floor) return { eye: eye.slice(), level: -1 };
-      return { eye: [eye[0], floor.y + this.eye_height, eye[2]], level: floor.level };
-    }
-
-    tryMove(from, dx, dz) {
-      if (!isFinite(dx) || !isFinite(dz)) return null;
-      const mid = [from.eye[0] + dx, from.eye[1], from.eye[2] + dz];
-      if (!this.segmentClear(from.eye, mid, this.radius)) return null;
-      const floor_now = from.level >= 0 ? this.scene.walk.levels[from.level].floor_y : from.eye[1] - this.eye_height;
-      const floor = this.floorUnder(mid[0], mid[2], floor_now + this.step + this.tol);
-      if (!floor) {
-        if (from.level >= 0) return null;
-        const under = this.floorUnder(from.eye[0], from.eye[2], floor_now + this.tol);
-        if (under && under.y >= floor_now - this.tol) return null;
-        return { eye: mid, level: -1 };
+    // The eye set on the floor under it, into `out` (a new state when none is given).
+    place(eye, out = makeWalkState()) {
+      const x = eye[0], y = eye[1], z = eye[2];
+      if (!this.floorUnder(x, z, y - this.eye_height + this.step + this.tol)) {
+        out.eye[0] = x, out.eye[1] = y, out.eye[2] = z, out.level = -1;
+        return out;
       }
-      const to = { eye: [mid[0], floor.y + this.eye_height, mid[2]], level: floor.level };
-      if (to.eye[1] !== mid[1] && !this.segmentClear(mid, to.eye, 0)) return null;
-      return to;
+      out.eye[0] = x, out.eye[1] = this.floor.y + this.eye_height, out.eye[2] = z, out.level = this.floor.level;
+      return out;
     }
 
-    move(from, dx, dz) {
-      if (dx === 0 && dz === 0) return from;
-      let to = this.tryMove(from, dx, dz);
-      if (to) return to;
-      const n = [0, 0, 0];
-      const mid = [from.eye[0] + dx, from.eye[1], from.eye[2] + dz];
+    // Walker::tryMove into `to` (not `from`); false where the move is refused.
+    tryMove(from, dx, dz, to) {
+      if (!isFinite(dx) || !isFinite(dz)) return false;
+      const mid = this.mid;
+      mid[0] = from.eye[0] + dx, mid[1] = from.eye[1], mid[2] = from.eye[2] + dz;
+      if (!this.segmentClear(from.eye, mid, this.radius)) return false;
+      const floor_now = from.level >= 0 ? this.scene.walk.levels[from.level].floor_y : from.eye[1] - this.eye_height;
+      if (!this.floorUnder(mid[0], mid[2], floor_now + this.step + this.tol)) {
+        if (from.level >= 0) return false;
+        if (this.floorUnder(from.eye[0], from.eye[2], floor_now + this.tol) && this.floor.y >= floor_now - this.tol) return false;
+        to.eye[0] = mid[0], to.eye[1] = mid[1], to.eye[2] = mid[2], to.level = -1;
+        return true;
+      }
+      to.eye[0] = mid[0], to.eye[1] = this.floor.y + this.eye_height, to.eye[2] = mid[2], to.level = this.floor.level;
+      if (to.eye[1] !== mid[1] && !this.segmentClear(mid, to.eye, 0)) return false;
+      return true;
+    }
+
+    // Walker::move: the state after walking (dx, dz) from `from`, into `out` (which may be `from`;
+    // a new state when none is given).
+    move(from, dx, dz, out = makeWalkState()) {
+      const tried = this.tried;
+      if (dx === 0 && dz === 0) return copyState(from, out);
+      if (this.tryMove(from, dx, dz, tried)) return copyState(tried, out);
+      const n = this.normal, mid = this.mid;
+      n[0] = 0, n[1] = 0, n[2] = 0;
+      mid[0] = from.eye[0] + dx, mid[1] = from.eye[1], mid[2] = from.eye[2] + dz;
       if (!this.segmentClear(from.eye, mid, this.radius, n)) {
         const len = Math.hypot(n[0], n[2]);
         if (len > 0) {
           const ux = n[0] / len, uz = n[2] / len;
           const along = dx * ux + dz * uz;
-          to = this.tryMove(from, dx - along * ux, dz - along * uz);
-          if (to) return to;
+          if (this.tryMove(from, dx - along * ux, dz - along * uz, tried)) return copyState(tried, out);
         }
       }
-      to = this.tryMove(from, dx, 0);
-      if (to) return to;
-      to = this.tryMove(from, 0, dz);
-      if (to) return to;
-      return from;
+      if (this.tryMove(from, dx, 0, tried)) return copyState(tried, out);
+      if (this.tryMove(from, 0, dz, tried)) return copyState(tried, out);
+      return copyState(from, out);
     }
-  }
-
-  function fragmentVertices(sc, f) {
-    const first = sc.frag[4 * f], count = sc.frag[4 * f + 1];
-    const v = [];
-    for (let k = first; k < first + count; ++k) v.push([sc.vertices[3 * k], sc.vertices[3 * k + 1], sc.vertices[3 * k + 2]]);
-    return v;
-  }
-
-  function pointInPolygon(v, n, q, tol) {
-    for (let i = 0; i < v.length; ++i) {
-      const e = sub3(v[(i + 1) % v.length], v[i]);
-      if (dot3(cross3(e, sub3(q, v[i])), n) < -tol * len3(e)) return false;
-    }
-    return true;
-  }
-
-  function pointPolygonDistance(v, n, d, p, tol) {
-    const s = dot3(n, p) - d;
-    const q = [p[0] - s * n[0], p[1] - s * n[1], p[2] - s * n[2]];
-    let inside = true;
-    for (let i = 0; i < v.length && inside; ++i) {
-      const e = sub3(v[(i + 1) % v.length], v[i]);
-      if (dot3(cross3(e, sub3(q, v[i])), n) < -tol * len3(e)) inside = false;
-    }
-    if (inside) return Math.abs(s);
-    let best = Infinity;
-    for (let i = 0; i < v.length; ++i) {
-      const a = v[i], e = sub3(v[(i + 1) % v.length], v[i]);
-      const ee = dot3(e, e);
-      const t = ee > 0 ? Math.min(Math.max(dot3(sub3(p, a), e) / ee, 0), 1) : 0;
-      best = Math.min(best, len3(sub3(p, [a[0] + t * e[0], a[1] + t * e[1], a[2] + t * e[2]])));
-    }
-    return best;
   }
 
   // ---- camera (walkthrough/camera.cpp, clipFromEyeRelative(FreeCamera)) ----------------------
-  function clipMatrix(cam) {
+  // Into `m` (a Float32Array(16)) when given: a frame allocates nothing.
+  function clipMatrix(cam, m = new Float32Array(16)) {
     const cp = Math.cos(cam.pitch), sp = Math.sin(cam.pitch);
     const cy = Math.cos(cam.yaw), sy = Math.sin(cam.yaw);
-    const forward = [-sy * cp, sp, -cy * cp], right = [cy, 0, -sy], up = [sy * sp, cp, cy * sp];
     const f = 1 / Math.tan(0.5 * cam.fov_y);
     const aspect = cam.width / cam.height;
     const n = cam.near, fa = cam.far;
     const A = (fa + n) / (n - fa), B = 2 * fa * n / (n - fa);
-    const m = new Float32Array(16);
-    const set = (row, r, s, w) => {
-      m[row] = r[0] * s; m[4 + row] = r[1] * s; m[8 + row] = r[2] * s; m[12 + row] = w;
-    };
-    set(0, right, f / aspect, 0);
-    set(1, up, f, 0);
-    set(2, forward, -A, B);
-    set(3, forward, 1, 0);
+    // Rows: right (x) and up (y) scaled by the focal lengths, forward twice (depth and w).
+    const sx = f / aspect, fx = -sy * cp, fy = sp, fz = -cy * cp;
+    m[0] = cy * sx, m[4] = 0 * sx, m[8] = -sy * sx, m[12] = 0;
+    m[1] = sy * sp * f, m[5] = cp * f, m[9] = cy * sp * f, m[13] = 0;
+    m[2] = fx * -A, m[6] = fy * -A, m[10] = fz * -A, m[14] = B;
+    m[3] = fx, m[7] = fy, m[11] = fz, m[15] = 0;
     return m;
   }
 
   const api = { parseExport, ExportError, fnv1a64, planeSign, planeSignExact, frameOrder, makeOrder, levelAt,
-                bspOrder, Walker, clipMatrix };
+                bspOrder, Walker, makeWalkState, clipMatrix };
   if (typeof module === 'object' && module.exports) module.exports = api;
   else global.walkvis = api;
 })(typeof window !== 'undefined' ? window : globalThis);

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <random>
 #include <set>
 #include <string>
@@ -14,6 +16,22 @@
 #include "bsp/bsp.h"
 #include "scenes/scene.h"
 #include "walkthrough/movement.h"
+
+// Allocations made on this thread while counting (the test binary's own operator new).
+thread_local bool g_count_allocations = false;
+thread_local size_t g_allocations = 0;
+
+// GCC reads free() on what operator new returned as a mismatch; here operator new is malloc.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void* operator new(size_t size) {
+  if (g_count_allocations) ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, size_t) noexcept { std::free(p); }
+#pragma GCC diagnostic pop
 
 namespace walkvis {
 namespace {
@@ -168,6 +186,8 @@ TEST(Movement, StepsUpDropsDownRefusesLedges) {
   EXPECT_GE(edge.eye.x, -10.0);
 }
 
+// Also: the window moves the walker every frame, and a frame allocates nothing (the walls' BSP
+// walk keeps its stack in the walker); a stack made per wall query fails this.
 TEST(Movement, OfficeRandomWalkNeverCrossesAWall) {
   const Scene scene = loadScene("gen:office?rooms=12");
   const BspTree bsp = buildBsp(scene);
@@ -177,16 +197,20 @@ TEST(Movement, OfficeRandomWalkNeverCrossesAWall) {
   WalkState s = walker.place(scene.start_eye);
   ASSERT_GE(s.level, 0);
   double walked = 0.0;
+  g_allocations = 0;
   for (int i = 0; i < 5000; ++i) {
     const double a = angle(rng), l = std::pow(10.0, len_exp(rng));
+    g_count_allocations = true;
     const WalkState t = walker.move(s, {l * std::cos(a), l * std::sin(a)});
+    g_count_allocations = false;
     ASSERT_FALSE(crossesWall(bsp, s.eye, {t.eye.x, s.eye.y, t.eye.z})) << "push " << i;
     ASSERT_EQ(t.eye.y, scene.levels[t.level].floor_y + scene.eye_height);
     walked += glm::length(t.eye - s.eye);
     s = t;
   }
-  std::printf("office: walked %.1f m in 5000 pushes\n", walked);
+  std::printf("office: walked %.1f m in 5000 pushes, %zu allocations in the moves\n", walked, g_allocations);
   EXPECT_GT(walked, 100.0);
+  EXPECT_EQ(g_allocations, 0u);
 }
 
 TEST(Movement, FreedoomStairsSwitchLevels) {

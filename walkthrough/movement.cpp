@@ -57,6 +57,7 @@ Walker::Walker(const Scene& scene, const BspTree& bsp, const MoveOptions& option
   double scale = 1.0;
   for (int k = 0; k < 3; ++k) scale = std::max({scale, std::abs(b.lo[k]), std::abs(b.hi[k])});
   tol_ = 1e-9 * scale;
+  stack_.reserve(2 * bsp.nodes.size() + 2);
 
   double total = 0.0;
   double lx = std::numeric_limits<double>::infinity(), lz = lx, hx = -lx, hz = -lx;
@@ -211,8 +212,12 @@ bool Walker::wallBlocks(uint32_t f, const glm::dvec3& a, const glm::dvec3& b, do
 
 bool Walker::blocks(int32_t node_index, const glm::dvec3& a, const glm::dvec3& b, double radius,
                     glm::dvec3* blocker) const {
-  // Explicit stack: BSP depth can be large on big maps.
-  std::vector<int32_t> stack{node_index};
+  // Explicit stack (BSP depth can be large on big maps), the walker's own: the root and each of a
+  // node's two children are pushed at most once, so it never outgrows the 2 · nodes + 2 the
+  // constructor reserved and a move allocates nothing.
+  std::vector<int32_t>& stack = stack_;
+  stack.clear();
+  stack.push_back(node_index);
   while (!stack.empty()) {
     const int32_t ni = stack.back();
     stack.pop_back();

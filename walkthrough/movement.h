@@ -40,6 +40,7 @@ struct WalkState {
   int level = -1;  // index into Scene::levels whose floor is under the eye; -1 off the walkable region
 };
 
+// One walker per thread: its queries share a scratch stack, so that a move allocates nothing.
 class Walker {
  public:
   // Keeps references to scene and bsp (which must outlive it); bsp is the scene's BSP.
@@ -111,6 +112,7 @@ class Walker {
   double grid_x0_ = 0.0, grid_z0_ = 0.0, cell_ = 1.0;
   int grid_nx_ = 0, grid_nz_ = 0;
   std::vector<uint32_t> cell_start_, cell_pieces_;
+  mutable std::vector<int32_t> stack_;  // blocks()' BSP walk (capacity 2 · nodes + 2)
 };
 
 }  // namespace walkvis

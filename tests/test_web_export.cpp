@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -22,6 +23,7 @@
 
 #include "command_test_util.h"
 #include "core/byte_io.h"
+#include "core/hash.h"
 #include "core/rng.h"
 #include "png_test_util.h"
 #include "walkthrough/frame.h"
@@ -203,6 +205,24 @@ TEST_F(WebExport, ViewerRulesEqualTheLibrary) {
   }
 }
 
+TEST_F(WebExport, DeflatedReadsAsRaw) {
+  if (!have("node")) GTEST_SKIP() << "node is not installed";
+  const fs::path raw = dir_ / "office_raw";
+  ASSERT_EQ(run(kBinary + " export " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
+                " --frames 40 --raw --web " + raw.string() + " > /dev/null 2>&1"),
+            0);
+  const uint64_t deflated = fs::file_size(dir_ / "office" / "walkvis.bin"), whole = fs::file_size(raw / "walkvis.bin");
+  std::printf("office: walkvis.bin %llu bytes deflated, %llu raw\n", static_cast<unsigned long long>(deflated),
+              static_cast<unsigned long long>(whole));
+  EXPECT_LT(3 * deflated, whole) << "trees and vertices deflate 4-10 times";
+  const std::string log = (dir_ / "same_scene.log").string();
+  EXPECT_EQ(run("node " + std::string(WALKVIS_SOURCE_DIR) + "/tests/web/same_scene.js " + (dir_ / "office").string() +
+                " " + raw.string() + " > " + log + " 2>&1"),
+            0)
+      << readText(log);
+  std::printf("%s", readText(log).c_str());
+}
+
 // Ids images hold id + 1 little-endian in R, G, B (scene_drawer.h); 0 is nothing.
 uint32_t idAt(const Image& image, int x, int y) {
   const size_t p = 3 * (static_cast<size_t>(y) * image.width + x);  // any image width: a screenshot is cropped
@@ -274,6 +294,29 @@ TEST_F(WebExport, PageDrawsWhatRenderDraws) {
   EXPECT_GT(ids.size(), 30u) << "the frames must show the building";
 }
 
+// `bin` with one byte flipped in its largest deflated section and every checksum made to agree
+// again (docs/web/README.md, "Format"), so that only the inflate can tell.
+std::vector<uint8_t> brokenDeflate(std::vector<uint8_t> bin) {
+  auto at = [&](size_t offset) { return ByteReader(std::span(bin).subspan(offset), "walkvis.bin"); };
+  auto put = [&](size_t offset, uint64_t v) { std::memcpy(bin.data() + offset, &v, sizeof v); };
+  const uint32_t count = at(12).get<uint32_t>();
+  size_t entry = 0;
+  uint64_t largest = 0;
+  for (uint32_t k = 0; k < count; ++k) {
+    ByteReader r = at(40 + 40 * k + 4);
+    const uint32_t encoding = r.get<uint32_t>();
+    r.get<uint64_t>();
+    const uint64_t stored = r.get<uint64_t>();
+    if (encoding == 1 && stored > largest) entry = 40 + 40 * k, largest = stored;
+  }
+  EXPECT_GT(largest, 0u) << "the export has no deflated section";
+  const uint64_t offset = at(entry + 8).get<uint64_t>();
+  bin[offset + largest / 2] ^= 0x40;
+  put(entry + 32, fnv1a(bin.data() + offset, largest));
+  put(24, fnv1a(bin.data() + 40, 40 * size_t{count}));
+  return bin;
+}
+
 TEST_F(WebExport, BrokenExportShowsAMessage) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
   const std::vector<uint8_t> bin = readFileBytes((dir_ / "office" / "walkvis.bin").string());
@@ -289,6 +332,7 @@ TEST_F(WebExport, BrokenExportShowsAMessage) {
       {"truncated_script", whole.substr(0, whole.size() / 2), "truncated or malformed"},
       {"truncated_binary", webDataScript(std::span(bin.data(), bin.size() - 1000)), "truncated"},
       {"flipped_byte", webDataScript(flipped), "checksum mismatch"},
+      {"bad_deflate", webDataScript(brokenDeflate(bin)), "does not inflate"},
       {"not_an_export", webDataScript(std::vector<uint8_t>(100, 7)), "not a walkvis web export"},
       {"missing", "", "missing or unreadable"},
   };

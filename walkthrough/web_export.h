@@ -1,7 +1,8 @@
 // A building and its HFD trees as a static web page (`walkvis export FILE --web DIR`): index.html,
 // the viewer scripts (walkthrough/web/, embedded in the binary) and one binary of everything a
 // frame needs, in the format docs/web/README.md describes (versioned, little-endian, each section
-// checksummed with FNV-1a 64, view cells in sections of their own).
+// checksummed with FNV-1a 64 and deflated where that is smaller, view cells in sections of their
+// own).
 //
 // The page walks the building by the C++ rules, ported (walkthrough/web/viewer.js): the order of
 // a frame is FrameBuilder::build's for mode hfd with no backface culling, the walking is Walker's,
@@ -23,10 +24,17 @@ namespace walkvis {
 struct WebExportOptions {
   uint32_t tour_frames = 120;  // keys of the automatic tour stored for ?frame=K (automaticTour, 30 fps)
   MoveOptions move;            // the walker's radius and step, as the window uses
+  bool deflate = true;         // store a section deflated where that is smaller (false: every section raw)
+};
+
+struct WebSectionBytes {
+  std::string tag;
+  uint64_t bytes = 0;   // the section's bytes (CELL: all view cells together)
+  uint64_t stored = 0;  // as stored in walkvis.bin (deflated where smaller)
 };
 
 struct WebExportReport {
-  std::vector<std::pair<std::string, uint64_t>> sections;  // tag and bytes, in file order (CELL summed)
+  std::vector<WebSectionBytes> sections;  // in file order
   uint64_t binary_bytes = 0;  // walkvis.bin
   uint64_t script_bytes = 0;  // walkvis-data.js: the same bytes in base64, for pages opened from file://
   uint64_t page_bytes = 0;    // index.html and the viewer scripts

@@ -29,8 +29,9 @@ int runExport(const ExportArgs& args) {
   std::fprintf(stderr, "writing the web export of %s into %s\n", args.source.c_str(), args.web.c_str());
   const WebExportReport r = writeWebExport(world, args.web, args.options);
   std::printf("web export of %s: %u view cells, %u tour keys\n", args.source.c_str(), r.cells, r.tour_keys);
-  for (const auto& [tag, bytes] : r.sections)
-    std::printf("  %-4s %12llu bytes\n", tag.c_str(), static_cast<unsigned long long>(bytes));
+  for (const WebSectionBytes& s : r.sections)
+    std::printf("  %-4s %12llu bytes, %12llu stored\n", s.tag.c_str(), static_cast<unsigned long long>(s.bytes),
+                static_cast<unsigned long long>(s.stored));
   std::printf("  walkvis.bin %llu bytes, walkvis-data.js %llu bytes (for file://), page %llu bytes\n",
               static_cast<unsigned long long>(r.binary_bytes), static_cast<unsigned long long>(r.script_bytes),
               static_cast<unsigned long long>(r.page_bytes));
@@ -48,6 +49,7 @@ void addExportCommand(CLI::App& app, CommandRunner& runner) {
       ->required();
   sub->add_option("--scene", args->scene, "The scene the file was built from (its colours, stairs and start)");
   addLoadOptions(*sub, args->load);
+  sub->add_flag("--raw{false}", args->options.deflate, "Store every section raw (default: deflated where smaller)");
   sub->add_option("--frames", args->options.tour_frames, "Keys of the automatic tour stored for ?frame=K")
       ->check(CLI::Range(1u, 100000u));
   sub->callback([args, &runner] { runner = [args] { return runExport(*args); }; });

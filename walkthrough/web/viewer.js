@@ -15,9 +15,10 @@
 (function (global) {
   // ---- format -------------------------------------------------------------------------------
   const kMagic = 'WALKVISW';
-  const kVersion = 1;
+  const kVersion = 2;
   const kHeaderBytes = 40;
-  const kTocEntryBytes = 32;
+  const kTocEntryBytes = 40;
+  const kRaw = 0, kDeflate = 1;  // a section's encoding (deflate: a zlib stream, RFC 1950)
 
   class ExportError extends Error {}
 
@@ -47,8 +48,15 @@
     return hi * 4294967296 + lo;
   }
 
-  // Reads an export; throws ExportError naming `name` and what is wrong.
-  function parseExport(buffer, name) {
+  // The bytes of a zlib stream, inflated by the platform (browsers and Node alike).
+  async function inflate(bytes) {
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('deflate'));
+    return new Response(stream).arrayBuffer();
+  }
+
+  // Reads an export (a promise of the scene: deflated sections inflate asynchronously); rejects
+  // with an ExportError naming `name` and what is wrong.
+  async function parseExport(buffer, name) {
     const fail = (what) => { throw new ExportError(name + ': ' + what); };
     const bytes = new Uint8Array(buffer);
     if (bytes.length < kHeaderBytes) fail('truncated (' + bytes.length + ' bytes, no header)');
@@ -66,32 +74,47 @@
     const tocSum = fnv1a64(toc);
     if (tocSum[0] !== view.getUint32(24, true) || tocSum[1] !== view.getUint32(28, true))
       fail('checksum mismatch in the table of sections');
+    // Every section checked against its checksum as stored, then the deflated ones inflated; each
+    // section's arrays are then views of `buffer` (the file for a raw one) from `offset`.
     const sections = [];
     for (let k = 0; k < count; ++k) {
       const at = kHeaderBytes + k * kTocEntryBytes;
       let tag = '';
       for (let i = 0; i < 4; ++i) tag += String.fromCharCode(bytes[at + i]);
-      const offset = u64(view, at + 8), length = u64(view, at + 16);
-      if (offset % 8 !== 0 || offset + length > bytes.length) fail('section ' + k + ' (' + tag + ') out of range');
-      const body = bytes.subarray(offset, offset + length);
+      const encoding = view.getUint32(at + 4, true);
+      const offset = u64(view, at + 8), stored = u64(view, at + 16), length = u64(view, at + 24);
+      if (offset % 8 !== 0 || offset + stored > bytes.length) fail('section ' + k + ' (' + tag + ') out of range');
+      if (encoding !== kRaw && encoding !== kDeflate) fail('section ' + k + ' (' + tag + '): unknown encoding ' + encoding);
+      if (encoding === kRaw && stored !== length) fail('section ' + k + ' (' + tag + '): sizes disagree');
+      const body = bytes.subarray(offset, offset + stored);
       const sum = fnv1a64(body);
-      if (sum[0] !== view.getUint32(at + 24, true) || sum[1] !== view.getUint32(at + 28, true))
+      if (sum[0] !== view.getUint32(at + 32, true) || sum[1] !== view.getUint32(at + 36, true))
         fail('checksum mismatch in section ' + k + ' (' + tag + ')');
-      sections.push({ tag, offset, length });
+      sections.push({ tag, encoding, body, buffer, offset, length });
     }
+    await Promise.all(sections.filter((s) => s.encoding === kDeflate).map(async (s) => {
+      let raw;
+      try {
+        raw = await inflate(s.body);
+      } catch (e) {
+        fail('section ' + s.tag + ' does not inflate (' + e.message + ')');
+      }
+      if (raw.byteLength !== s.length) fail('section ' + s.tag + ' inflates to ' + raw.byteLength + ' bytes, not ' + s.length);
+      s.buffer = raw, s.offset = 0;
+    }));
     const find = (tag) => {
       const s = sections.filter((x) => x.tag === tag);
       if (s.length === 0) fail('no ' + tag + ' section');
       return s;
     };
-    const f64 = (s) => new Float64Array(buffer, s.offset, s.length / 8);
-    const u32 = (s, from, n) => new Uint32Array(buffer, s.offset + from, n);
-    const i32 = (s, from, n) => new Int32Array(buffer, s.offset + from, n);
+    const f64 = (s) => new Float64Array(s.buffer, s.offset, s.length / 8);
+    const u32 = (s, from, n) => new Uint32Array(s.buffer, s.offset + from, n);
+    const i32 = (s, from, n) => new Int32Array(s.buffer, s.offset + from, n);
 
     let meta;
     try {
       const m = find('META')[0];
-      meta = JSON.parse(new TextDecoder().decode(bytes.subarray(m.offset, m.offset + m.length)));
+      meta = JSON.parse(new TextDecoder().decode(new Uint8Array(m.buffer, m.offset, m.length)));
     } catch (e) {
       if (e instanceof ExportError) throw e;
       fail('META section is not JSON (' + e.message + ')');
@@ -124,7 +147,7 @@
     const cells = sections.filter((x) => x.tag === 'CELL');
     for (const l of meta.levels) scene.levels.push({ floor_y: l.floor_y, height: l.height, cells: [] });
     for (const s of cells) {
-      const cell = parseCell(buffer, s, n, fail);
+      const cell = parseCell(s.buffer, s, n, fail);
       if (cell.level >= scene.levels.length) fail('a view cell of level ' + cell.level + ', which does not exist');
       scene.levels[cell.level].cells.push(cell);
     }

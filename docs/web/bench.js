@@ -4,6 +4,8 @@
 // WALKVIS_BENCH_TIMEOUT, default 600) and prints one JSON line per URL, {"url", "page"}; page: from the navigation's start, the page's HTML
 // received (document_ms), page.js started (script_ms), the export's bytes in hand (bytes_ms), the
 // data read and checked (load_ms); parse_ms = load_ms - bytes_ms; and the page's bench record.
+// With WALKVIS_BENCH_SHOT=FILE.png, a screenshot of the view (640×480 from the top left) after
+// each page: a ?frame view's overlay then shows real frame times.
 //
 // Why not `chromium --dump-dom`: it dumps at the load event, and the page finishes later (its
 // sections inflate asynchronously); under --virtual-time-budget it waits, but the clock stops
@@ -68,6 +70,11 @@ async function main() {
       const { result } = await send('Runtime.evaluate', { expression: probe, returnByValue: true }, sessionId);
       if (result && result.value) {
         console.log(JSON.stringify({ url, page: JSON.parse(result.value) }));
+        if (process.env.WALKVIS_BENCH_SHOT) {
+          const clip = { x: 0, y: 0, width: 640, height: 480, scale: 1 };
+          const { data } = await send('Page.captureScreenshot', { format: 'png', clip, captureBeyondViewport: true }, sessionId);
+          require('fs').writeFileSync(process.env.WALKVIS_BENCH_SHOT, Buffer.from(data, 'base64'));
+        }
         break;
       }
       if (Date.now() - t0 > timeoutMs) {

@@ -317,6 +317,54 @@ std::vector<uint8_t> brokenDeflate(std::vector<uint8_t> bin) {
   return bin;
 }
 
+// The page fetches walkvis.bin from a server (from file:// it runs walkvis-data.js): the same view
+// from a local static server is the same image, pixel for pixel; a missing walkvis.bin there is
+// a message naming it and the server's answer.
+TEST_F(WebExport, PageLoadsFromAServer) {
+  if (!have("chromium") || !have("python3")) GTEST_SKIP() << "chromium or python3 is not installed";
+  const fs::path log = dir_ / "server.log", pid = dir_ / "server.pid";
+  fs::create_directories(dir_ / "served_missing");
+  for (const char* f : {"index.html", "viewer.js", "page.js"})
+    fs::copy_file(dir_ / "office" / f, dir_ / "served_missing" / f, fs::copy_options::overwrite_existing);
+  // Port 0: the system picks a free one, which the server prints ("... port N ...").
+  ASSERT_EQ(run("python3 -u -m http.server 0 --bind 127.0.0.1 --directory " + dir_.string() + " > " + log.string() +
+                " 2>&1 & echo $! > " + pid.string()),
+            0);
+  std::string port;
+  for (int i = 0; i < 100 && port.empty(); ++i) {
+    const std::string text = readText(log);
+    const size_t at = text.find(" port ");
+    if (at != std::string::npos) port = text.substr(at + 6, text.find_first_not_of("0123456789", at + 6) - at - 6);
+    else ::usleep(100000);
+  }
+  const std::string stop = "kill " + readText(pid);
+  if (port.empty()) run(stop);
+  ASSERT_FALSE(port.empty()) << readText(log);
+  const std::string view = "/index.html?frame=5&ids=1&size=160x120";
+  const fs::path served = dir_ / "served.png", local = dir_ / "local.png", dom = dir_ / "served_missing.html";
+  const std::string shot = chromium(dir_) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=";
+  const int a = run(shot + served.string() + " 'http://127.0.0.1:" + port + "/office" + view + "' > /dev/null 2>&1");
+  const int b = run(shot + local.string() + " 'file://" + (dir_ / "office").string() + view + "' > /dev/null 2>&1");
+  const int c = run(chromium(dir_) + "--virtual-time-budget=10000 --dump-dom 'http://127.0.0.1:" + port +
+                    "/served_missing" + view + "' > " + dom.string() + " 2> /dev/null");
+  run(stop);
+  ASSERT_EQ(a, 0);
+  ASSERT_EQ(b, 0);
+  ASSERT_EQ(c, 0);
+  const Image from_server = readPng(served.string()), from_file = readPng(local.string());
+  EXPECT_EQ(from_server.width, from_file.width);
+  EXPECT_EQ(from_server.height, from_file.height);
+  EXPECT_TRUE(from_server.rgb == from_file.rgb) << "the served page must draw what the local one draws";
+  std::set<uint32_t> ids;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) ids.insert(idAt(from_server, x, y));
+  EXPECT_GT(ids.size(), 5u) << "the view must show the building";
+  const std::string text = readText(dom);
+  EXPECT_NE(text.find("walkvis.bin: 404"), std::string::npos) << text.substr(0, 400);
+  EXPECT_EQ(text.find("data-drawn"), std::string::npos);
+  EXPECT_NE(readText(log).find("GET /office/walkvis.bin"), std::string::npos) << "the page must fetch the binary";
+}
+
 TEST_F(WebExport, BrokenExportShowsAMessage) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
   const std::vector<uint8_t> bin = readFileBytes((dir_ / "office" / "walkvis.bin").string());

@@ -48,10 +48,22 @@
     return hi * 4294967296 + lo;
   }
 
-  // The bytes of a zlib stream, inflated by the platform (browsers and Node alike).
-  async function inflate(bytes) {
-    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('deflate'));
-    return new Response(stream).arrayBuffer();
+  // The `length` bytes of a zlib stream, inflated by the platform (browsers and Node alike) into
+  // one buffer as the chunks come (a quarter faster on FZK-Haus than new Response(stream)'s
+  // arrayBuffer(), which gathers them first); rejects when the stream is bad or of another length.
+  async function inflate(bytes, length) {
+    const out = new Uint8Array(length);
+    const reader = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('deflate')).getReader();
+    let at = 0;
+    for (;;) {
+      const { done, value } = await reader.read();
+      if (done) break;
+      if (value.length > length - at) throw new Error('longer than ' + length + ' bytes');
+      out.set(value, at);
+      at += value.length;
+    }
+    if (at !== length) throw new Error(at + ' bytes, not ' + length);
+    return out.buffer;
   }
 
   // Reads an export (a promise of the scene: deflated sections inflate asynchronously); rejects
@@ -95,11 +107,10 @@
     await Promise.all(sections.filter((s) => s.encoding === kDeflate).map(async (s) => {
       let raw;
       try {
-        raw = await inflate(s.body);
+        raw = await inflate(s.body, s.length);
       } catch (e) {
         fail('section ' + s.tag + ' does not inflate (' + e.message + ')');
       }
-      if (raw.byteLength !== s.length) fail('section ' + s.tag + ' inflates to ' + raw.byteLength + ' bytes, not ' + s.length);
       s.buffer = raw, s.offset = 0;
     }));
     const find = (tag) => {

@@ -10,13 +10,11 @@
 // Prints one summary line per part; exit status 0 when everything agrees, 1 otherwise.
 'use strict';
 const fs = require('fs');
-const path = require('path');
-const W = require(path.join(__dirname, '..', '..', 'walkthrough', 'web', 'viewer.js'));
+const { W, readExport } = require('./read_export.js');
 
 async function main() {
   const [dir, expectedFile] = process.argv.slice(2);
-  const b = fs.readFileSync(path.join(dir, 'walkvis.bin'));
-  const scene = await W.parseExport(b.buffer.slice(b.byteOffset, b.byteOffset + b.length), 'walkvis.bin');
+  const scene = await readExport(dir);
   const expected = JSON.parse(fs.readFileSync(expectedFile, 'utf8'));
   const walker = new W.Walker(scene);
   const order = W.makeOrder(scene);

@@ -3,17 +3,10 @@
 // walker's floors and every view cell's tree equal element for element, META equal.
 // Prints one line; exit status 0 when equal, 1 otherwise.
 'use strict';
-const fs = require('fs');
-const path = require('path');
-const W = require(path.join(__dirname, '..', '..', 'walkthrough', 'web', 'viewer.js'));
-
-const read = (dir) => {
-  const b = fs.readFileSync(path.join(dir, 'walkvis.bin'));
-  return W.parseExport(b.buffer.slice(b.byteOffset, b.byteOffset + b.length), dir + '/walkvis.bin');
-};
+const { readExport } = require('./read_export.js');
 
 async function main() {
-  const [a, b] = await Promise.all(process.argv.slice(2, 4).map(read));
+  const [a, b] = await Promise.all(process.argv.slice(2, 4).map(readExport));
   const differ = [];
   let values = 0;
   const same = (x, y, where) => {

@@ -27,7 +27,8 @@
   }
 
   function decodeBase64(text) {
-    if (Uint8Array.fromBase64) return Uint8Array.fromBase64(text).buffer;  // native: 30× atob's loop on 60 MB
+    // Native where there is one: 45 MB in 0.25 s against 0.48-0.56 s for atob's loop (Chromium 156).
+    if (Uint8Array.fromBase64) return Uint8Array.fromBase64(text).buffer;
     const bin = atob(text);
     const bytes = new Uint8Array(bin.length);
     for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
@@ -350,16 +351,18 @@ void main() {
     // t0 → t1 the order, t1 → t2 the GL calls (the rasteriser may still be working at t2). `run`:
     // 'hfd' (the frame's order, what the walkthrough draws), 'bsp' (the BSP's back-to-front order
     // everywhere), 'zbuffer' (every fragment, depth test on) or 'floor' (nothing drawn).
+    const orderFor = (eye, run) => {
+      if (run === 'hfd') W.frameOrder(scene, eye, order);
+      else if (run === 'bsp') order.n = 0, W.bspOrder(scene, eye, order);
+      else return run === 'zbuffer' ? all : none;
+      return order;
+    };
     const drawView = (eye, yaw, pitch, width, height, run = 'hfd') => {
       setCamera(cam, eye, yaw, pitch, width, height);
       drawn.t0 = performance.now();
-      let o = order;
-      if (run === 'hfd') W.frameOrder(scene, eye, order);
-      else if (run === 'bsp') order.n = 0, W.bspOrder(scene, eye, order);
-      else o = run === 'zbuffer' ? all : none;
-      drawn.order = o;
+      drawn.order = orderFor(cam.eye, run);
       drawn.t1 = performance.now();
-      drawn.rejected = renderer.draw(cam, o, style, run === 'zbuffer');
+      drawn.rejected = renderer.draw(cam, drawn.order, style, run === 'zbuffer');
       drawn.t2 = performance.now();
       drawn.order_ms = drawn.t1 - drawn.t0;
       return drawn;
@@ -407,8 +410,7 @@ void main() {
           for (let k = 0; k < keys; ++k, ++calls) {
             const key = tour[k];
             cam.eye[0] = key[1], cam.eye[1] = key[2], cam.eye[2] = key[3];
-            if (run === 'hfd') W.frameOrder(scene, cam.eye, order);
-            else order.n = 0, W.bspOrder(scene, cam.eye, order);
+            orderFor(cam.eye, run);
           }
         } while (performance.now() - t < 200);
         modes[run].order_us_mean = 1000 * (performance.now() - t) / calls;

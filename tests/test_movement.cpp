@@ -21,16 +21,31 @@
 thread_local bool g_count_allocations = false;
 thread_local size_t g_allocations = 0;
 
-// GCC reads free() on what operator new returned as a mismatch; here operator new is malloc.
+// Every unaligned form is replaced, not only the plain one: the library's std::stable_sort takes
+// its buffer with the nothrow form and gives it back with plain delete, so a form left to the
+// runtime (ASan's) would pair its allocation with this file's free(). GCC reads free() on what
+// operator new returned as a mismatch; here operator new is malloc.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(size_t size) {
+static void* countedAllocation(size_t size) noexcept {
   if (g_count_allocations) ++g_allocations;
-  if (void* p = std::malloc(size ? size : 1)) return p;
+  return std::malloc(size ? size : 1);
+}
+void* operator new(size_t size) {
+  if (void* p = countedAllocation(size)) return p;
   throw std::bad_alloc();
 }
+void* operator new[](size_t size) { return operator new(size); }
+void* operator new(size_t size, const std::nothrow_t&) noexcept { return countedAllocation(size); }
+void* operator new[](size_t size, const std::nothrow_t&) noexcept {
+  return countedAllocation(size);
+}
 void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, size_t) noexcept { std::free(p); }
+void operator delete[](void* p, size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 #pragma GCC diagnostic pop
 
 namespace walkvis {

@@ -1,12 +1,16 @@
 // `walkvis export FILE --web DIR` and the page it writes (walkthrough/web_export.h, docs/web/README.md):
-//  - the folder is whole and the same bytes every time; bad sources fail before writing anything;
+//  - the folder is whole (walkvis.bin, one file per view cell) and the same bytes every time; bad
+//    sources fail before writing anything;
 //  - the viewer's ported rules (viewer.js under Node) give the C++ library's frame orders, walker
 //    moves and placements on an office cut into several view cells and on a house with a stair;
 //  - headless Chromium (SwiftShader WebGL2) draws 24 tour frames whose ids images equal
 //    `walkvis render --ids` of the same keys, with no console errors. Tolerance: a differing pixel
 //    must be an edge pixel of the reference (its 3×3 neighbourhood holds two ids or more: the two
 //    rasterisers may round an edge differently), and at most 1% of all pixels may differ;
-//  - a truncated or corrupted export shows one clear message on the page, not a blank canvas.
+//  - served, the page fetches only the view cell its eye stands in; until a cell is in it draws the
+//    BSP order, whose ids images equal `walkvis render --mode bsp --ids`;
+//  - a truncated or corrupted export or view cell shows one clear message on the page, not a
+//    blank canvas.
 // Node and Chromium steps are skipped where those are missing (scripts/install-deps installs both).
 #include <unistd.h>
 
@@ -43,6 +47,23 @@ constexpr int kWidth = 160, kHeight = 120;
 int run(const std::string& command) { return runCommand(command); }
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 bool have(const char* tool) { return run(std::string("command -v ") + tool + " > /dev/null 2>&1") == 0; }
+
+// An export's binaries: walkvis.bin and every cells/K.bin, in bytes.
+uint64_t binaryBytes(const fs::path& web) {
+  uint64_t total = fs::file_size(web / "walkvis.bin");
+  for (const auto& e : fs::directory_iterator(web / "cells"))
+    if (e.path().extension() == ".bin") total += fs::file_size(e.path());
+  return total;
+}
+
+// The view cells of a tree file, all levels together.
+size_t viewCells(const fs::path& tree) {
+  WorldOptions options;
+  options.objects = ObjectSet::kNone;
+  size_t cells = 0;
+  for (const PfdLevel& l : openWorld(tree.string(), options).trees.levels) cells += l.cells.size();
+  return cells;
+}
 
 std::string chromium(const fs::path& dir) {
   // Headless, software WebGL2 (ANGLE on SwiftShader), no sandbox as root, a profile of its own, one
@@ -82,22 +103,43 @@ class WebExport : public ::testing::Test {
 fs::path WebExport::dir_;
 
 TEST_F(WebExport, FolderIsWholeAndReproducible) {
+  const fs::path web = dir_ / "office";
   for (const char* f : {"index.html", "viewer.js", "page.js", "walkvis.bin", "walkvis-data.js"})
-    EXPECT_TRUE(fs::exists(dir_ / "office" / f)) << f;
-  for (const auto& e : fs::directory_iterator(dir_ / "office"))
-    EXPECT_NE(e.path().extension(), ".tmp") << e.path();
-  const std::vector<uint8_t> bin = readFileBytes((dir_ / "office" / "walkvis.bin").string());
+    EXPECT_TRUE(fs::exists(web / f)) << f;
+  for (const fs::path& d : {web, web / "cells"})
+    for (const auto& e : fs::directory_iterator(d)) EXPECT_NE(e.path().extension(), ".tmp") << e.path();
+  const std::vector<uint8_t> bin = readFileBytes((web / "walkvis.bin").string());
   ASSERT_GE(bin.size(), 40u);
   EXPECT_EQ(std::string(bin.begin(), bin.begin() + 8), "WALKVISW");
-  EXPECT_EQ(readText(dir_ / "office" / "walkvis-data.js"), webDataScript(bin));
-  // The same bytes from a second run; the page names no network address.
+  EXPECT_EQ(readText(web / "walkvis-data.js"), webDataScript(bin));
+  // One file and one script per view cell of the tree (the office is cut into several), no more.
+  const size_t cells = viewCells(dir_ / "office.hfd");
+  ASSERT_GT(cells, 3u);
+  EXPECT_EQ(static_cast<size_t>(std::distance(fs::directory_iterator(web / "cells"), fs::directory_iterator())),
+            2 * cells);
+  std::vector<std::vector<uint8_t>> cell_bytes;
+  for (uint32_t k = 0; k < cells; ++k) {
+    cell_bytes.push_back(readFileBytes((web / "cells" / (std::to_string(k) + ".bin")).string()));
+    EXPECT_EQ(std::string(cell_bytes.back().begin(), cell_bytes.back().begin() + 8), "WALKVISW") << k;
+    EXPECT_EQ(readText(web / "cells" / (std::to_string(k) + ".js")), webCellScript(k, cell_bytes.back())) << k;
+  }
+  // The same bytes from a second run, into a folder that holds cells of a larger export: those go.
   const fs::path again = dir_ / "office_again";
+  fs::create_directories(again / "cells");
+  for (const char* f : {"99.bin", "99.js"}) writeTextFileAtomically((again / "cells" / f).string(), "old", "test");
+  writeTextFileAtomically((again / "cells" / "notes.txt").string(), "not ours", "test");
   ASSERT_EQ(run(kBinary + " export " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
                 " --frames 40 --web " + again.string() + " > /dev/null 2>&1"),
             0);
   EXPECT_EQ(readFileBytes((again / "walkvis.bin").string()), bin);
+  for (uint32_t k = 0; k < cells; ++k)
+    EXPECT_EQ(readFileBytes((again / "cells" / (std::to_string(k) + ".bin")).string()), cell_bytes[k]) << k;
+  EXPECT_FALSE(fs::exists(again / "cells" / "99.bin"));
+  EXPECT_FALSE(fs::exists(again / "cells" / "99.js"));
+  EXPECT_TRUE(fs::exists(again / "cells" / "notes.txt")) << "only cell files are removed";
+  // The page names no network address.
   for (const char* f : {"index.html", "viewer.js", "page.js"})
-    EXPECT_EQ(readText(dir_ / "office" / f).find("http"), std::string::npos) << f;
+    EXPECT_EQ(readText(web / f).find("http"), std::string::npos) << f;
 }
 
 TEST_F(WebExport, BadSourcesFailBeforeWriting) {
@@ -211,8 +253,8 @@ TEST_F(WebExport, DeflatedReadsAsRaw) {
   ASSERT_EQ(run(kBinary + " export " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
                 " --frames 40 --raw --web " + raw.string() + " > /dev/null 2>&1"),
             0);
-  const uint64_t deflated = fs::file_size(dir_ / "office" / "walkvis.bin"), whole = fs::file_size(raw / "walkvis.bin");
-  std::printf("office: walkvis.bin %llu bytes deflated, %llu raw\n", static_cast<unsigned long long>(deflated),
+  const uint64_t deflated = binaryBytes(dir_ / "office"), whole = binaryBytes(raw);
+  std::printf("office: walkvis.bin and cells %llu bytes deflated, %llu raw\n", static_cast<unsigned long long>(deflated),
               static_cast<unsigned long long>(whole));
   EXPECT_LT(3 * deflated, whole) << "the deflated export must be under a third of the raw one";
   const std::string log = (dir_ / "same_scene.log").string();
@@ -317,15 +359,21 @@ std::vector<uint8_t> brokenDeflate(std::vector<uint8_t> bin) {
   return bin;
 }
 
-// The page fetches walkvis.bin from a server (from file:// it runs walkvis-data.js): the same view
-// from a local static server is the same image, pixel for pixel; a missing walkvis.bin there is
-// a message naming it and the server's answer.
+// The page fetches walkvis.bin from a server (from file:// it runs walkvis-data.js), then only the
+// view cell its eye stands in: the same view from a local static server is the same image, pixel
+// for pixel, drawn from the HFD tree of the one cell fetched; a missing walkvis.bin or cell file
+// there is a message naming it and the server's answer.
 TEST_F(WebExport, PageLoadsFromAServer) {
   if (!have("chromium") || !have("python3")) GTEST_SKIP() << "chromium or python3 is not installed";
   const fs::path log = dir_ / "server.log", pid = dir_ / "server.pid";
   fs::create_directories(dir_ / "served_missing");
-  for (const char* f : {"index.html", "viewer.js", "page.js"})
+  fs::create_directories(dir_ / "served_no_cells");
+  for (const char* f : {"index.html", "viewer.js", "page.js"}) {
     fs::copy_file(dir_ / "office" / f, dir_ / "served_missing" / f, fs::copy_options::overwrite_existing);
+    fs::copy_file(dir_ / "office" / f, dir_ / "served_no_cells" / f, fs::copy_options::overwrite_existing);
+  }
+  fs::copy_file(dir_ / "office" / "walkvis.bin", dir_ / "served_no_cells" / "walkvis.bin",
+                fs::copy_options::overwrite_existing);
   // Port 0: the system picks a free one, which the server prints ("... port N ...").
   ASSERT_EQ(run("python3 -u -m http.server 0 --bind 127.0.0.1 --directory " + dir_.string() + " > " + log.string() +
                 " 2>&1 & echo $! > " + pid.string()),
@@ -340,17 +388,23 @@ TEST_F(WebExport, PageLoadsFromAServer) {
   const std::string stop = "kill " + readText(pid);
   if (port.empty()) run(stop);
   ASSERT_FALSE(port.empty()) << readText(log);
-  const std::string view = "/index.html?frame=5&ids=1&size=160x120";
-  const fs::path served = dir_ / "served.png", local = dir_ / "local.png", dom = dir_ / "served_missing.html";
+  const std::string view = "/index.html?frame=5&ids=1&size=160x120", url = "'http://127.0.0.1:" + port;
+  const fs::path served = dir_ / "served.png", local = dir_ / "local.png", dom = dir_ / "served.html",
+                 missing = dir_ / "served_missing.html", no_cells = dir_ / "served_no_cells.html";
   const std::string shot = chromium(dir_) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=";
-  const int a = run(shot + served.string() + " 'http://127.0.0.1:" + port + "/office" + view + "' > /dev/null 2>&1");
+  const std::string dump = chromium(dir_) + "--virtual-time-budget=10000 --dump-dom ";
+  const int a = run(shot + served.string() + " " + url + "/office" + view + "' > /dev/null 2>&1");
+  const std::string fetched = readText(log);  // what the screenshot's page asked for
   const int b = run(shot + local.string() + " 'file://" + (dir_ / "office").string() + view + "' > /dev/null 2>&1");
-  const int c = run(chromium(dir_) + "--virtual-time-budget=10000 --dump-dom 'http://127.0.0.1:" + port +
-                    "/served_missing" + view + "' > " + dom.string() + " 2> /dev/null");
+  const int c = run(dump + url + "/office" + view + "' > " + dom.string() + " 2> /dev/null");
+  const int d = run(dump + url + "/served_missing" + view + "' > " + missing.string() + " 2> /dev/null");
+  const int e = run(dump + url + "/served_no_cells" + view + "' > " + no_cells.string() + " 2> /dev/null");
   run(stop);
   ASSERT_EQ(a, 0);
   ASSERT_EQ(b, 0);
   ASSERT_EQ(c, 0);
+  ASSERT_EQ(d, 0);
+  ASSERT_EQ(e, 0);
   const Image from_server = readPng(served.string()), from_file = readPng(local.string());
   EXPECT_EQ(from_server.width, from_file.width);
   EXPECT_EQ(from_server.height, from_file.height);
@@ -359,38 +413,114 @@ TEST_F(WebExport, PageLoadsFromAServer) {
   for (int y = 0; y < kHeight; ++y)
     for (int x = 0; x < kWidth; ++x) ids.insert(idAt(from_server, x, y));
   EXPECT_GT(ids.size(), 5u) << "the view must show the building";
-  const std::string text = readText(dom);
-  EXPECT_NE(text.find("walkvis.bin: 404"), std::string::npos) << text.substr(0, 400);
-  EXPECT_EQ(text.find("data-drawn"), std::string::npos);
-  EXPECT_NE(readText(log).find("GET /office/walkvis.bin"), std::string::npos) << "the page must fetch the binary";
+  EXPECT_NE(fetched.find("GET /office/walkvis.bin"), std::string::npos) << "the page must fetch the binary";
+  // One cell of the office's several fetched, and its tree drew the view.
+  std::vector<std::string> cells_fetched;
+  for (size_t at = fetched.find("GET /office/cells/"); at != std::string::npos;
+       at = fetched.find("GET /office/cells/", at + 1))
+    cells_fetched.push_back(fetched.substr(at + 18, fetched.find(' ', at + 18) - at - 18));
+  ASSERT_EQ(cells_fetched.size(), 1u) << fetched;
+  const std::string page = readText(dom);
+  EXPECT_NE(page.find("data-used=\"hfd\""), std::string::npos) << page.substr(0, 400);
+  const std::string k = cells_fetched[0].substr(0, cells_fetched[0].find('.'));
+  EXPECT_EQ(cells_fetched[0], k + ".bin");
+  EXPECT_NE(page.find("data-cells-loaded=\"" + k + "\""), std::string::npos) << page.substr(0, 400);
+  for (const auto& [file, message] : {std::pair{missing, std::string("walkvis.bin: 404")},
+                                      std::pair{no_cells, "cells/" + k + ".bin: 404"}}) {
+    const std::string text = readText(file);
+    EXPECT_NE(text.find(message), std::string::npos) << text.substr(0, 400);
+    EXPECT_EQ(text.find("data-drawn"), std::string::npos);
+  }
+}
+
+// Until its view cell is in, the page draws the BSP order (&cells=none keeps every cell out): the
+// ids images equal `walkvis render --mode bsp --ids` of the same keys, within the edge tolerance of
+// PageDrawsWhatRenderDraws.
+TEST_F(WebExport, WithoutItsCellThePageDrawsTheBspOrder) {
+  if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
+  constexpr int kFrames = 6;
+  const fs::path ref = dir_ / "render_bsp", web = dir_ / "office";
+  const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
+  ASSERT_EQ(run(kBinary + " render " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
+                " --mode bsp --ids --objects none --frames " + std::to_string(kFrames) + " --size " + size + " --out " +
+                ref.string() + " > /dev/null 2>&1"),
+            0);
+  const fs::path dom = dir_ / "bsp_dom.html";
+  ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --dump-dom 'file://" + (web / "index.html").string() +
+                "?frame=2&cells=none&size=" + size + "' > " + dom.string() + " 2> /dev/null"),
+            0);
+  const std::string page = readText(dom);
+  EXPECT_NE(page.find("data-used=\"bsp\""), std::string::npos) << page.substr(0, 400);
+  EXPECT_EQ(page.find("data-cells-loaded"), std::string::npos) << page.substr(0, 400);
+  size_t pixels = 0, differing = 0, inner_differing = 0;
+  for (int k = 0; k < kFrames; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", k);
+    const fs::path shot = dir_ / ("bsp_page_" + std::string(name));
+    ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=" + shot.string() +
+                  " 'file://" + (web / "index.html").string() + "?frame=" + std::to_string(k) +
+                  "&cells=none&ids=1&size=" + size + "' > /dev/null 2>&1"),
+              0);
+    const Image a = readPng((ref / name).string()), b = readPng(shot.string());
+    ASSERT_GE(b.width, kWidth) << name;
+    ASSERT_GE(b.height, kHeight) << name;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        ++pixels;
+        if (idAt(a, x, y) == idAt(b, x, y)) continue;
+        ++differing;
+        if (!edgePixel(a, x, y) && ++inner_differing <= 5)
+          ADD_FAILURE() << name << " (" << x << ", " << y << "): page id " << idAt(b, x, y) << ", render id "
+                        << idAt(a, x, y) << " away from any edge";
+      }
+  }
+  std::printf("BSP page against render --mode bsp: %d frames, %zu pixels, %zu differing (%zu off edges)\n", kFrames,
+              pixels, differing, inner_differing);
+  EXPECT_EQ(inner_differing, 0u);
+  EXPECT_LE(differing, pixels / 100);
 }
 
 TEST_F(WebExport, BrokenExportShowsAMessage) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
   const std::vector<uint8_t> bin = readFileBytes((dir_ / "office" / "walkvis.bin").string());
+  const size_t cells = viewCells(dir_ / "office.hfd");
+  // What each cell's script holds in a case: the cell as exported, nothing, the cell with one byte
+  // flipped, or a cell of another export (the house's first) under the same name.
+  enum class Cells { kIntact, kMissing, kFlipped, kForeign };
   struct Case {
     const char* name;
     std::string script;  // walkvis-data.js
+    Cells cells;
     const char* message;
   };
   std::vector<uint8_t> flipped = bin;
   flipped[flipped.size() / 2] ^= 0x40;
   const std::string whole = webDataScript(bin);
   const std::vector<Case> cases = {
-      {"truncated_script", whole.substr(0, whole.size() / 2), "truncated or malformed"},
-      {"truncated_binary", webDataScript(std::span(bin.data(), bin.size() - 1000)), "truncated"},
-      {"flipped_byte", webDataScript(flipped), "checksum mismatch"},
-      {"bad_deflate", webDataScript(brokenDeflate(bin)), "does not inflate"},
-      {"not_an_export", webDataScript(std::vector<uint8_t>(100, 7)), "not a walkvis web export"},
-      {"missing", "", "missing or unreadable"},
+      {"truncated_script", whole.substr(0, whole.size() / 2), Cells::kIntact, "truncated or malformed"},
+      {"truncated_binary", webDataScript(std::span(bin.data(), bin.size() - 1000)), Cells::kIntact, "truncated"},
+      {"flipped_byte", webDataScript(flipped), Cells::kIntact, "checksum mismatch"},
+      {"bad_deflate", webDataScript(brokenDeflate(bin)), Cells::kIntact, "does not inflate"},
+      {"not_an_export", webDataScript(std::vector<uint8_t>(100, 7)), Cells::kIntact, "not a walkvis web export"},
+      {"missing", "", Cells::kIntact, "walkvis-data.js: missing or unreadable"},
+      {"cell_missing", whole, Cells::kMissing, ".js: missing or unreadable"},
+      {"cell_flipped", whole, Cells::kFlipped, ".bin: checksum mismatch"},
+      {"cell_foreign", whole, Cells::kForeign, "not this export's view cell"},
   };
+  const std::vector<uint8_t> foreign = readFileBytes((dir_ / "house" / "cells" / "0.bin").string());
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const fs::path web = dir_ / (std::string("broken_") + c.name);
-    fs::create_directories(web);
+    fs::create_directories(web / "cells");
     for (const char* f : {"index.html", "viewer.js", "page.js"})
       fs::copy_file(dir_ / "office" / f, web / f, fs::copy_options::overwrite_existing);
     if (!c.script.empty()) writeTextFileAtomically((web / "walkvis-data.js").string(), c.script, "test");
+    for (uint32_t k = 0; k < cells && c.cells != Cells::kMissing; ++k) {
+      std::vector<uint8_t> cell = readFileBytes((dir_ / "office" / "cells" / (std::to_string(k) + ".bin")).string());
+      if (c.cells == Cells::kFlipped) cell[cell.size() / 2] ^= 0x40;
+      if (c.cells == Cells::kForeign) cell = foreign;
+      writeTextFileAtomically((web / "cells" / (std::to_string(k) + ".js")).string(), webCellScript(k, cell), "test");
+    }
     const fs::path dom = web / "dom.html";
     ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --dump-dom 'file://" + (web / "index.html").string() +
                   "?frame=0' > " + dom.string() + " 2> /dev/null"),

@@ -1,10 +1,10 @@
-// The web export's binary (docs/web/README.md, "Format") and its folder. The layout is chosen
+// The web export's binaries (docs/web/README.md, "Format") and its folder. The layout is chosen
 // for the page: a section is stored raw or deflated, whichever is smaller (the trees of
 // docs/web/README.md's scenes shrink 3.8-14 times, and browsers inflate natively:
-// DecompressionStream), and the viewer maps its
-// arrays as typed arrays over the inflated bytes, or over the file itself for a raw section, which
-// starts on an 8-byte boundary; a view cell is a section of its own, so its tree can be fetched
-// alone.
+// DecompressionStream), and the viewer maps its arrays as typed arrays over the inflated bytes, or
+// over the file itself for a raw section, which starts on an 8-byte boundary. The trees, most of
+// an export's bytes, are one file per view cell: a page fetches the cell it stands in first and
+// draws the BSP order until it arrives.
 #include "walkthrough/web_export.h"
 
 #include <algorithm>
@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <optional>
+#include <set>
 
 #include <nlohmann/json.hpp>
 #include <zlib.h>
@@ -29,7 +30,7 @@ static_assert(std::endian::native == std::endian::little,
               "the web export is little-endian: the page reads it with typed arrays");
 
 constexpr char kMagic[8] = {'W', 'A', 'L', 'K', 'V', 'I', 'S', 'W'};
-constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersion = 3;
 constexpr size_t kHeaderBytes = 40;
 constexpr size_t kTocEntryBytes = 40;
 constexpr uint32_t kRaw = 0, kDeflate = 1;  // a section's encoding (deflate: RFC 1950 zlib stream)
@@ -171,6 +172,59 @@ nlohmann::json metaJson(const World& world, const CameraPath& tour, const Walker
   return m;
 }
 
+// A container (docs/web/README.md, "Format"): each section deflated where smaller (`deflate`),
+// then the header, the table of sections and the sections, each padded to 8 bytes.
+std::vector<uint8_t> containerBytes(std::vector<Section>& sections, bool deflate) {
+  for (Section& s : sections) {
+    s.length = s.out.bytes.size();
+    if (!deflate) continue;
+    if (auto d = deflated(s.out.bytes)) {
+      s.out.bytes = std::move(*d);
+      s.encoding = kDeflate;
+    }
+  }
+  ByteWriter toc;
+  uint64_t offset = kHeaderBytes + kTocEntryBytes * sections.size();
+  offset = (offset + 7) & ~uint64_t{7};
+  const uint64_t first_offset = offset;
+  for (const Section& s : sections) {
+    toc.bytes.insert(toc.bytes.end(), s.tag, s.tag + 4);
+    toc.put(s.encoding);
+    toc.put(offset);
+    toc.put(static_cast<uint64_t>(s.out.bytes.size()));
+    toc.put(s.length);
+    toc.put(fnv1a(s.out.bytes.data(), s.out.bytes.size()));
+    offset = (offset + s.out.bytes.size() + 7) & ~uint64_t{7};
+  }
+  ByteWriter file;
+  file.bytes.reserve(offset);
+  file.bytes.insert(file.bytes.end(), kMagic, kMagic + 8);
+  file.put(kVersion);
+  file.put(static_cast<uint32_t>(sections.size()));
+  file.put(offset);
+  file.put(fnv1a(toc.bytes.data(), toc.bytes.size()));
+  file.put(uint64_t{0});
+  file.bytes.insert(file.bytes.end(), toc.bytes.begin(), toc.bytes.end());
+  file.bytes.resize(first_offset, 0);
+  for (const Section& s : sections) {
+    file.bytes.insert(file.bytes.end(), s.out.bytes.begin(), s.out.bytes.end());
+    file.bytes.resize((file.bytes.size() + 7) & ~size_t{7}, 0);
+  }
+  return std::move(file.bytes);
+}
+
+// The checksum of a container's table of sections (header bytes 24-31), as 16 hex digits: META
+// names each view cell's file by it, so that a cell file of another export is told apart.
+std::string tocChecksumHex(const std::vector<uint8_t>& container) {
+  uint64_t sum = 0;
+  std::memcpy(&sum, container.data() + 24, sizeof sum);
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(sum));
+  return text;
+}
+
+std::string cellFileName(uint32_t k) { return "cells/" + std::to_string(k) + ".bin"; }
+
 void appendBase64(std::string& out, std::span<const uint8_t> bytes) {
   static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   size_t i = 0;
@@ -197,17 +251,51 @@ void appendBase64(std::string& out, std::span<const uint8_t> bytes) {
 
 }  // namespace
 
-std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& options, WebExportReport* report) {
+WebExportFiles webExportFiles(const World& world, const WebExportOptions& options, WebExportReport* report) {
   if (world.trees.levels.empty() || world.trees.kind != TreeKind::kHfd)
     throw Error(world.source + ": a web export needs a tree file made by `walkvis build --tree hfd`");
   const BspTree& bsp = world.trees.bsp;
   const Walker walker(world.scene, bsp, options.move);
   const CameraPath tour = automaticTour(world.scene, bsp, options.tour_frames);
+  WebExportFiles files;
+  if (report) report->sections.clear();
+  auto count = [&](const std::vector<Section>& sections) {
+    if (!report) return;
+    for (const Section& s : sections) {
+      const std::string tag(s.tag, 4);
+      auto at = std::find_if(report->sections.begin(), report->sections.end(),
+                             [&](const WebSectionBytes& b) { return b.tag == tag; });
+      if (at == report->sections.end()) at = report->sections.insert(report->sections.end(), {tag, 0, 0});
+      at->bytes += s.length;
+      at->stored += s.out.bytes.size();
+    }
+  };
+
+  // Each view cell a container of its own (cells/K.bin), named in META with its level, box and
+  // the checksum of its table.
+  nlohmann::json cells = nlohmann::json::array();
+  for (uint32_t l = 0; l < world.trees.levels.size(); ++l) {
+    for (const PfdTree& t : world.trees.levels[l].cells) {
+      std::vector<Section> one(1, section("CELL"));
+      one[0].out = cellSection(t, l);
+      files.cells.push_back(containerBytes(one, options.deflate));
+      count(one);
+      nlohmann::json c = {{"level", l},
+                          {"file", cellFileName(static_cast<uint32_t>(cells.size()))},
+                          {"bytes", one[0].length},
+                          {"stored", files.cells.back().size()},
+                          {"checksum", tocChecksumHex(files.cells.back())}};
+      c["box"] = t.cell ? nlohmann::json{t.cell->lo.x, t.cell->lo.y, t.cell->hi.x, t.cell->hi.y} : nlohmann::json();
+      cells.push_back(std::move(c));
+    }
+  }
 
   std::vector<Section> sections;
   {
     Section s = section("META");
-    const std::string text = metaJson(world, tour, walker).dump();
+    nlohmann::json meta = metaJson(world, tour, walker);
+    meta["cells"] = std::move(cells);
+    const std::string text = meta.dump();
     s.out.bytes.assign(text.begin(), text.end());
     sections.push_back(std::move(s));
   }
@@ -251,70 +339,20 @@ std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& 
     s.out = walkSection(world.scene);
     sections.push_back(std::move(s));
   }
-  uint32_t cells = 0;
-  for (uint32_t l = 0; l < world.trees.levels.size(); ++l) {
-    for (const PfdTree& t : world.trees.levels[l].cells) {
-      Section s = section("CELL");
-      s.out = cellSection(t, l);
-      sections.push_back(std::move(s));
-      ++cells;
-    }
-  }
-
-  // Each section deflated where smaller, then the header, the table of sections and the
-  // sections, each padded to 8 bytes.
-  for (Section& s : sections) {
-    s.length = s.out.bytes.size();
-    if (!options.deflate) continue;
-    if (auto d = deflated(s.out.bytes)) {
-      s.out.bytes = std::move(*d);
-      s.encoding = kDeflate;
-    }
-  }
-  ByteWriter toc;
-  uint64_t offset = kHeaderBytes + kTocEntryBytes * sections.size();
-  offset = (offset + 7) & ~uint64_t{7};
-  const uint64_t first_offset = offset;
-  for (const Section& s : sections) {
-    toc.bytes.insert(toc.bytes.end(), s.tag, s.tag + 4);
-    toc.put(s.encoding);
-    toc.put(offset);
-    toc.put(static_cast<uint64_t>(s.out.bytes.size()));
-    toc.put(s.length);
-    toc.put(fnv1a(s.out.bytes.data(), s.out.bytes.size()));
-    offset = (offset + s.out.bytes.size() + 7) & ~uint64_t{7};
-  }
-  ByteWriter file;
-  file.bytes.reserve(offset);
-  file.bytes.insert(file.bytes.end(), kMagic, kMagic + 8);
-  file.put(kVersion);
-  file.put(static_cast<uint32_t>(sections.size()));
-  file.put(offset);
-  file.put(fnv1a(toc.bytes.data(), toc.bytes.size()));
-  file.put(uint64_t{0});
-  file.bytes.insert(file.bytes.end(), toc.bytes.begin(), toc.bytes.end());
-  file.bytes.resize(first_offset, 0);
-  for (const Section& s : sections) {
-    file.bytes.insert(file.bytes.end(), s.out.bytes.begin(), s.out.bytes.end());
-    file.bytes.resize((file.bytes.size() + 7) & ~size_t{7}, 0);
-  }
-  std::vector<uint8_t> out = std::move(file.bytes);
+  files.binary = containerBytes(sections, options.deflate);
   if (report) {
+    // walkvis.bin's sections in file order, then CELL (every cell file together).
+    std::vector<WebSectionBytes> cell_bytes = std::move(report->sections);
     report->sections.clear();
-    for (const Section& s : sections) {
-      const std::string tag(s.tag, 4);
-      if (!report->sections.empty() && report->sections.back().tag == tag) {
-        report->sections.back().bytes += s.length;
-        report->sections.back().stored += s.out.bytes.size();
-      } else {
-        report->sections.push_back({tag, s.length, s.out.bytes.size()});
-      }
-    }
-    report->binary_bytes = out.size();
-    report->cells = cells;
+    count(sections);
+    report->sections.insert(report->sections.end(), cell_bytes.begin(), cell_bytes.end());
+    report->binary_bytes = files.binary.size();
+    report->cell_bytes = 0;
+    for (const auto& c : files.cells) report->cell_bytes += c.size();
+    report->cells = static_cast<uint32_t>(files.cells.size());
     report->tour_keys = static_cast<uint32_t>(tour.keys.size());
   }
-  return out;
+  return files;
 }
 
 std::string webDataScript(std::span<const uint8_t> bytes) {
@@ -325,22 +363,49 @@ std::string webDataScript(std::span<const uint8_t> bytes) {
   return script;
 }
 
+std::string webCellScript(uint32_t k, std::span<const uint8_t> bytes) {
+  std::string script = "walkvisCell(" + std::to_string(k) + ", \"";
+  script.reserve(bytes.size() * 4 / 3 + 64);
+  appendBase64(script, bytes);
+  script += "\");\n";
+  return script;
+}
+
 WebExportReport writeWebExport(const World& world, const std::string& dir, const WebExportOptions& options) {
   WebExportReport report;
-  const std::vector<uint8_t> bytes = webExportBytes(world, options, &report);
+  const WebExportFiles files = webExportFiles(world, options, &report);
+  namespace fs = std::filesystem;
+  const fs::path root(dir), cells = root / "cells";
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) throw Error(dir + ": cannot create the export folder");
-  const std::filesystem::path root(dir);
-  // Each file is renamed into place whole; the binary first, so a first export's folder that
-  // holds index.html holds the data too.
-  writeFileAtomically((root / "walkvis.bin").string(), bytes, "the web export");
-  const std::string script = webDataScript(bytes);
+  fs::create_directories(cells, ec);
+  if (ec || !fs::is_directory(cells)) throw Error(dir + ": cannot create the export folder");
+  // Each file is renamed into place whole: the cells first, then the binary that names them by
+  // their checksums (a page never pairs a new walkvis.bin with an old cell unnoticed), then the
+  // page, so a first export's folder that holds index.html holds the data too.
+  std::set<std::string> written;
+  for (uint32_t k = 0; k < files.cells.size(); ++k) {
+    const std::string bin = std::to_string(k) + ".bin", js = std::to_string(k) + ".js";
+    writeFileAtomically((cells / bin).string(), files.cells[k], "the web export");
+    const std::string script = webCellScript(k, files.cells[k]);
+    writeTextFileAtomically((cells / js).string(), script, "the web export");
+    report.script_bytes += script.size();
+    written.insert(bin);
+    written.insert(js);
+  }
+  writeFileAtomically((root / "walkvis.bin").string(), files.binary, "the web export");
+  const std::string script = webDataScript(files.binary);
   writeTextFileAtomically((root / "walkvis-data.js").string(), script, "the web export");
-  report.script_bytes = script.size();
+  report.script_bytes += script.size();
   for (const WebAsset& a : webAssets()) {
     writeFileAtomically((root / a.name).string(), std::span(a.data, a.size), "the web export");
     report.page_bytes += a.size;
+  }
+  // Cells of an earlier export into the same folder that this one does not have.
+  for (const fs::directory_entry& e : fs::directory_iterator(cells, ec)) {
+    const std::string name = e.path().filename().string(), stem = e.path().stem().string();
+    const bool cell_file = !stem.empty() && stem.find_first_not_of("0123456789") == std::string::npos &&
+                           (e.path().extension() == ".bin" || e.path().extension() == ".js");
+    if (cell_file && !written.count(name)) fs::remove(e.path(), ec);
   }
   return report;
 }

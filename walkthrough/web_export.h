@@ -1,8 +1,7 @@
 // A building and its HFD trees as a static web page (`walkvis export FILE --web DIR`): index.html,
-// the viewer scripts (walkthrough/web/, embedded in the binary) and one binary of everything a
-// frame needs, in the format docs/web/README.md describes (versioned, little-endian, each section
-// checksummed with FNV-1a 64 and deflated where that is smaller, view cells in sections of their
-// own).
+// the viewer scripts (walkthrough/web/, embedded in the binary), one binary of the building and
+// one per view cell's tree, in the format docs/web/README.md describes (versioned, little-endian,
+// each section checksummed with FNV-1a 64 and deflated where that is smaller).
 //
 // The page walks the building by the C++ rules, ported (walkthrough/web/viewer.js): the order of
 // a frame is FrameBuilder::build's for mode hfd with no backface culling, the walking is Walker's,
@@ -34,24 +33,35 @@ struct WebSectionBytes {
 };
 
 struct WebExportReport {
-  std::vector<WebSectionBytes> sections;  // in file order
+  std::vector<WebSectionBytes> sections;  // walkvis.bin's in file order, then CELL (all cell files)
   uint64_t binary_bytes = 0;  // walkvis.bin
-  uint64_t script_bytes = 0;  // walkvis-data.js: the same bytes in base64, for pages opened from file://
+  uint64_t cell_bytes = 0;    // cells/K.bin, all together
+  uint64_t script_bytes = 0;  // walkvis-data.js and cells/K.js: the same bytes in base64, for file://
   uint64_t page_bytes = 0;    // index.html and the viewer scripts
   uint32_t cells = 0;
   uint32_t tour_keys = 0;
 };
 
-// The binary (walkvis.bin). `world` must hold HFD trees (Error otherwise). Deterministic.
-std::vector<uint8_t> webExportBytes(const World& world, const WebExportOptions& options = {},
-                                    WebExportReport* report = nullptr);
+// The binaries: walkvis.bin (the building, its walking floors, the tour, and META's list of view
+// cells) and each view cell's tree as a container of its own (cells/K.bin, K in META's order), so
+// that a page fetches only the cells it stands in. `world` must hold HFD trees (Error otherwise).
+// Deterministic.
+struct WebExportFiles {
+  std::vector<uint8_t> binary;
+  std::vector<std::vector<uint8_t>> cells;
+};
+WebExportFiles webExportFiles(const World& world, const WebExportOptions& options = {},
+                              WebExportReport* report = nullptr);
 
-// walkvis-data.js for `bytes`: one call walkvisData("<base64>"), the form a page opened from
-// file:// can load (browsers refuse fetch() there, not <script src>).
+// The scripts a page opened from file:// loads instead (browsers refuse fetch() there, not
+// <script src>): walkvis-data.js is one call walkvisData("<base64 of walkvis.bin>"), cells/K.js
+// one call walkvisCell(K, "<base64 of cells/K.bin>").
 std::string webDataScript(std::span<const uint8_t> bytes);
+std::string webCellScript(uint32_t k, std::span<const uint8_t> bytes);
 
-// Writes the folder: index.html, viewer.js, page.js, walkvis.bin, walkvis-data.js, each through a
-// temporary file and a rename. Error naming the folder or file that cannot be written.
+// Writes the folder: index.html, viewer.js, page.js, walkvis.bin, walkvis-data.js and cells/K.bin,
+// cells/K.js, each through a temporary file and a rename; cell files of an earlier export there
+// that this one lacks are removed. Error naming the folder or file that cannot be written.
 WebExportReport writeWebExport(const World& world, const std::string& dir, const WebExportOptions& options = {});
 
 // The embedded page files (web_assets.cpp, generated from walkthrough/web/ at build time).

@@ -32,9 +32,9 @@ int runExport(const ExportArgs& args) {
   for (const WebSectionBytes& s : r.sections)
     std::printf("  %-4s %12llu bytes, %12llu stored\n", s.tag.c_str(), static_cast<unsigned long long>(s.bytes),
                 static_cast<unsigned long long>(s.stored));
-  std::printf("  walkvis.bin %llu bytes, walkvis-data.js %llu bytes (for file://), page %llu bytes\n",
-              static_cast<unsigned long long>(r.binary_bytes), static_cast<unsigned long long>(r.script_bytes),
-              static_cast<unsigned long long>(r.page_bytes));
+  std::printf("  walkvis.bin %llu bytes, cells/*.bin %llu bytes (%u files), scripts for file:// %llu bytes, page %llu bytes\n",
+              static_cast<unsigned long long>(r.binary_bytes), static_cast<unsigned long long>(r.cell_bytes), r.cells,
+              static_cast<unsigned long long>(r.script_bytes), static_cast<unsigned long long>(r.page_bytes));
   std::printf("open %s/index.html (or serve the folder)\n", args.web.c_str());
   return 0;
 }
@@ -45,7 +45,7 @@ void addExportCommand(CLI::App& app, CommandRunner& runner) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* sub = app.add_subcommand("export", "A static web page that walks an HFD tree file's building in WebGL2");
   sub->add_option("source", args->source, "A tree file made by `walkvis build SCENE --tree hfd`")->required();
-  sub->add_option("--web", args->web, "Output folder (index.html, viewer.js, page.js, walkvis.bin, walkvis-data.js)")
+  sub->add_option("--web", args->web, "Output folder (index.html, viewer.js, page.js, walkvis.bin, walkvis-data.js, cells/K.bin and .js)")
       ->required();
   sub->add_option("--scene", args->scene, "The scene the file was built from (its colours, stairs and start)");
   addLoadOptions(*sub, args->load);

@@ -1,10 +1,10 @@
 // The page of a walkvis web export: loads walkvis.bin (walkvis-data.js from file://, where browsers
-// refuse fetch), draws with WebGL2 what walkthrough/scene_drawer.cpp draws (the same shaders, eye-
+// refuse fetch), then each view cell's tree when an eye needs it (cellLoader), draws with WebGL2 what walkthrough/scene_drawer.cpp draws (the same shaders, eye-
 // relative float positions, depth test off, fragments in the frame's order), walks by viewer.js.
 //
 // URL: ?frame=K (key K of the stored tour) or ?eye=x,y,z&yaw=Y&pitch=P draws one view and sets
 // body[data-drawn]; &size=WxH (default 640x480), &ids=1 (fragment index + 1 as RGB), &wire=1,
-// &rejected=1, &overlay=1. ?bench=K draws tour keys 0..K-1 &reps=R times in four runs (the floor,
+// &rejected=1, &overlay=1, &cells=none (no cell fetched: the BSP order), &prefetch=0. ?bench=K draws tour keys 0..K-1 &reps=R times in four runs (the floor,
 // the z-buffer, the BSP order, the HFD order) and writes their medians, split into order, GL calls
 // and the wait for the rasteriser, into body[data-bench]. Otherwise: the walkthrough, WASD, Shift,
 // mouse look (click).
@@ -60,6 +60,72 @@
       };
       document.head.appendChild(s);
     });
+  }
+
+  // ---- view cells ---------------------------------------------------------------------------
+  // Each view cell's tree is a file of its own (cells/K.bin from a server, cells/K.js from file://),
+  // fetched when an eye first needs it and handed to the scene by W.attachCell; until it is in, a
+  // frame there takes the BSP order (W.frameOrder). Each cell is fetched at most once; the order
+  // they came in is body[data-cells-loaded]. A cell that cannot be read stops the page with its
+  // message (onError).
+  function cellLoader(scene, onError) {
+    const pending = new Map();  // cell index → promise of the cell
+    const scripts = new Map();  // cell index → the file:// script's hand-over
+    const loaded = [];
+    window.walkvisCell = (k, text) => {
+      const s = scripts.get(k);
+      if (!s) return;
+      s.done = true;
+      try {
+        s.resolve(decodeBase64(text));
+      } catch (e) {
+        s.reject(new W.ExportError('cells/' + k + '.js: not base64 (' + e.message + ')'));
+      }
+    };
+    const bytes = (cell) => {
+      if (location.protocol !== 'file:') {
+        return fetch(cell.file).then((r) => {
+          if (!r.ok) throw new W.ExportError(cell.file + ': ' + r.status + ' ' + r.statusText);
+          return r.arrayBuffer();
+        });
+      }
+      const js = 'cells/' + cell.index + '.js';
+      return new Promise((resolve, reject) => {
+        const hand = { resolve, reject, done: false };
+        scripts.set(cell.index, hand);
+        const s = document.createElement('script');
+        s.src = js;
+        s.onerror = () => reject(new W.ExportError(js + ': missing or unreadable beside index.html'));
+        s.onload = () => {
+          if (!hand.done) reject(new W.ExportError(js + ': truncated or malformed (it did not hand over the data)'));
+        };
+        document.head.appendChild(s);
+      });
+    };
+    const load = (cell) => {
+      let p = pending.get(cell.index);
+      if (!p) {
+        p = bytes(cell).then((buffer) => W.attachCell(scene, cell.index, buffer)).then((c) => {
+          loaded.push(c.index);
+          document.body.dataset.cellsLoaded = loaded.join(',');
+          return c;
+        });
+        p.catch(onError);
+        pending.set(cell.index, p);
+      }
+      return p;
+    };
+    // The cells not yet asked for, one at a time, the nearest to `eye()` first (its own level's
+    // before the others): a walker usually finds the next cell in when it gets there.
+    const prefetch = (eye) => {
+      const rest = scene.cells.filter((c) => !pending.has(c.index));
+      if (rest.length === 0) return;
+      const e = eye(), l = W.levelAt(scene, e);
+      const far = (c) => c.box ? Math.hypot(0.5 * (c.box[0] + c.box[2]) - e[0], 0.5 * (c.box[1] + c.box[3]) - e[2]) : 0;
+      rest.sort((a, b) => (a.level !== l) - (b.level !== l) || far(a) - far(b));
+      load(rest[0]).then(() => prefetch(eye), () => {});
+    };
+    return { load, prefetch };
   }
 
   // ---- drawing ------------------------------------------------------------------------------
@@ -299,11 +365,14 @@ void main() {
 
   function overlayText(scene, stats) {
     const m = scene.meta, deg = 180 / Math.PI;
+    const loaded = scene.cells.filter((c) => c.tree).length;
     const where = stats.order.used === 'hfd' ? 'HFD tree of level ' + stats.order.level
-                                             : 'BSP order (no tree here: stairs or off the height plane)';
+                : stats.order.waiting ? 'BSP order (view cell ' + stats.order.waiting.index + ' still loading)'
+                                      : 'BSP order (no tree here: stairs or off the height plane)';
     return [
       'walkvis · ' + m.source,
       'drawn ' + stats.order.n + ' of ' + m.fragments + ' polygons · ' + stats.order.tests + ' tests · ' + where,
+      'view cells loaded ' + loaded + ' of ' + scene.cells.length,
       'walk level ' + stats.walk_level + ' · eye (' + stats.eye.map((x) => x.toFixed(2)).join(', ') + ') yaw ' +
           (stats.yaw * deg).toFixed(1) + '° pitch ' + (stats.pitch * deg).toFixed(1) + '°',
       'frame ' + stats.frame_ms.toFixed(2) + ' ms (order ' + stats.order_ms.toFixed(2) + ') · ' +
@@ -314,13 +383,24 @@ void main() {
     ].join('\n');
   }
 
-  function start(scene) {
+  function start(scene, cells) {
     const gl = canvas.getContext('webgl2', { antialias: false, alpha: false, depth: true, preserveDrawingBuffer: true });
     if (!gl) throw new Error('this browser has no WebGL2');
     const renderer = new Renderer(gl, scene);
     const walker = new W.Walker(scene);
     const order = W.makeOrder(scene);
     const style = { ids: params.get('ids') === '1', wire: params.get('wire') === '1', rejected: params.get('rejected') === '1' };
+    // &cells=none: no view cell is fetched, every frame takes the BSP order (what a page shows
+    // until its cell arrives); otherwise a view waits for the cells of its eyes.
+    const fetchCells = params.get('cells') !== 'none';
+    const cellsFor = (eyes) => {
+      const need = new Set();
+      for (const e of eyes) {
+        const c = W.cellAt(scene, e);
+        if (c && !c.tree) need.add(c);
+      }
+      return fetchCells ? Promise.all([...need].map(cells.load)) : Promise.resolve();
+    };
     const tour = scene.meta.tour;
 
     const view = (() => {
@@ -369,79 +449,83 @@ void main() {
     };
 
     if (params.has('bench')) {
-      const [w, h] = parseSize(params.get('size'));
-      canvas.width = w, canvas.height = h;
-      canvas.style.width = w + 'px', canvas.style.height = h + 'px';
-      overlayEl.style.display = 'none';
       const keys = Math.min(Number(params.get('bench')) || 20, tour.length), reps = Math.max(Number(params.get('reps')) || 5, 1);
-      // Each run draws the keys in turn, every frame finished by a one-pixel read-back (which waits
-      // for the rasteriser); runs rotate their order each repetition, so that drift in the machine's
-      // speed falls on all alike. The floor is what a frame costs with nothing drawn.
-      const runs = ['floor', 'zbuffer', 'bsp', 'hfd'];
-      const pixel = new Uint8Array(4);
-      const rec = {};
-      for (const run of runs) rec[run] = { total: [], order: [], submit: [], wait: [], drawn: 0 };
-      for (let r = 0; r < reps; ++r) {
-        for (let j = 0; j < runs.length; ++j) {
-          const run = runs[(j + r) % runs.length], m = rec[run];
-          for (let k = 0; k < keys; ++k) {
-            const key = tour[k];
-            const d = drawView([key[1], key[2], key[3]], key[4], key[5], w, h, run);
-            gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
-            const t3 = performance.now();
-            m.total.push(t3 - d.t0), m.order.push(d.t1 - d.t0), m.submit.push(d.t2 - d.t1), m.wait.push(t3 - d.t2);
-            if (r === 0) m.drawn += d.order.n / keys;
+      cellsFor(tour.slice(0, keys).map((key) => [key[1], key[2], key[3]])).then(() => {
+        const [w, h] = parseSize(params.get('size'));
+        canvas.width = w, canvas.height = h;
+        canvas.style.width = w + 'px', canvas.style.height = h + 'px';
+        overlayEl.style.display = 'none';
+        // Each run draws the keys in turn, every frame finished by a one-pixel read-back (which waits
+        // for the rasteriser); runs rotate their order each repetition, so that drift in the machine's
+        // speed falls on all alike. The floor is what a frame costs with nothing drawn.
+        const runs = ['floor', 'zbuffer', 'bsp', 'hfd'];
+        const pixel = new Uint8Array(4);
+        const rec = {};
+        for (const run of runs) rec[run] = { total: [], order: [], submit: [], wait: [], drawn: 0 };
+        for (let r = 0; r < reps; ++r) {
+          for (let j = 0; j < runs.length; ++j) {
+            const run = runs[(j + r) % runs.length], m = rec[run];
+            for (let k = 0; k < keys; ++k) {
+              const key = tour[k];
+              const d = drawView([key[1], key[2], key[3]], key[4], key[5], w, h, run);
+              gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+              const t3 = performance.now();
+              m.total.push(t3 - d.t0), m.order.push(d.t1 - d.t0), m.submit.push(d.t2 - d.t1), m.wait.push(t3 - d.t2);
+              if (r === 0) m.drawn += d.order.n / keys;
+            }
           }
         }
-      }
-      const median = (a) => { const b = a.slice().sort((x, y) => x - y); return b[Math.floor(b.length / 2)]; };
-      const modes = {};
-      for (const run of runs) {
-        const m = rec[run];
-        modes[run] = { frame_ms_median: median(m.total), order_ms_median: median(m.order), submit_ms_median: median(m.submit),
-                       wait_ms_median: median(m.wait), drawn_mean: m.drawn };
-      }
-      // An order alone is below the clock's step (0.1 ms in a page without cross-origin isolation):
-      // each is timed again over many calls, the keys in turn, for the mean in microseconds.
-      for (const run of ['bsp', 'hfd']) {
-        let calls = 0;
-        const t = performance.now();
-        do {
-          for (let k = 0; k < keys; ++k, ++calls) {
-            const key = tour[k];
-            cam.eye[0] = key[1], cam.eye[1] = key[2], cam.eye[2] = key[3];
-            orderFor(cam.eye, run);
-          }
-        } while (performance.now() - t < 200);
-        modes[run].order_us_mean = 1000 * (performance.now() - t) / calls;
-      }
-      const hfd = modes.hfd;
-      document.body.dataset.bench = JSON.stringify({
-        keys, reps, width: w, height: h, fragments: scene.meta.fragments,
-        frame_ms_median: hfd.frame_ms_median, drawn_mean: hfd.drawn_mean, floor_ms_median: modes.floor.frame_ms_median,
-        hfd_speedup: modes.zbuffer.frame_ms_median / hfd.frame_ms_median, modes });
-      document.body.dataset.drawn = '1';
-      document.title = 'walkvis: bench done';
+        const median = (a) => { const b = a.slice().sort((x, y) => x - y); return b[Math.floor(b.length / 2)]; };
+        const modes = {};
+        for (const run of runs) {
+          const m = rec[run];
+          modes[run] = { frame_ms_median: median(m.total), order_ms_median: median(m.order), submit_ms_median: median(m.submit),
+                         wait_ms_median: median(m.wait), drawn_mean: m.drawn };
+        }
+        // An order alone is below the clock's step (0.1 ms in a page without cross-origin isolation):
+        // each is timed again over many calls, the keys in turn, for the mean in microseconds.
+        for (const run of ['bsp', 'hfd']) {
+          let calls = 0;
+          const t = performance.now();
+          do {
+            for (let k = 0; k < keys; ++k, ++calls) {
+              const key = tour[k];
+              cam.eye[0] = key[1], cam.eye[1] = key[2], cam.eye[2] = key[3];
+              orderFor(cam.eye, run);
+            }
+          } while (performance.now() - t < 200);
+          modes[run].order_us_mean = 1000 * (performance.now() - t) / calls;
+        }
+        const hfd = modes.hfd;
+        document.body.dataset.bench = JSON.stringify({
+          keys, reps, width: w, height: h, fragments: scene.meta.fragments,
+          frame_ms_median: hfd.frame_ms_median, drawn_mean: hfd.drawn_mean, floor_ms_median: modes.floor.frame_ms_median,
+          hfd_speedup: modes.zbuffer.frame_ms_median / hfd.frame_ms_median, modes });
+        document.body.dataset.drawn = '1';
+        document.title = 'walkvis: bench done';
+      }).catch(fail);
       return;
     }
 
     if (view) {
-      const [w, h] = parseSize(params.get('size'));
-      canvas.width = w, canvas.height = h;
-      canvas.style.width = w + 'px', canvas.style.height = h + 'px';
-      const d = drawView(view.eye, view.yaw, view.pitch, w, h);
-      gl.finish();
-      if (params.get('overlay') === '1') {
-        overlayEl.textContent = overlayText(scene, { order: d.order, walk_level: walker.place(view.eye).level, eye: view.eye,
-          yaw: view.yaw, pitch: view.pitch, frame_ms: performance.now() - d.t0, order_ms: d.order_ms, style, rejected_shown: d.rejected });
-      } else {
-        overlayEl.style.display = 'none';
-      }
-      document.body.dataset.drawn = '1';
-      document.body.dataset.polygons = String(d.order.n);
-      document.body.dataset.tests = String(d.order.tests);
-      document.body.dataset.used = d.order.used;
-      document.title = 'walkvis: drawn';
+      cellsFor([view.eye]).then(() => {
+        const [w, h] = parseSize(params.get('size'));
+        canvas.width = w, canvas.height = h;
+        canvas.style.width = w + 'px', canvas.style.height = h + 'px';
+        const d = drawView(view.eye, view.yaw, view.pitch, w, h);
+        gl.finish();
+        if (params.get('overlay') === '1') {
+          overlayEl.textContent = overlayText(scene, { order: d.order, walk_level: walker.place(view.eye).level, eye: view.eye,
+            yaw: view.yaw, pitch: view.pitch, frame_ms: performance.now() - d.t0, order_ms: d.order_ms, style, rejected_shown: d.rejected });
+        } else {
+          overlayEl.style.display = 'none';
+        }
+        document.body.dataset.drawn = '1';
+        document.body.dataset.polygons = String(d.order.n);
+        document.body.dataset.tests = String(d.order.tests);
+        document.body.dataset.used = d.order.used;
+        document.title = 'walkvis: drawn';
+      }).catch(fail);
       return;
     }
 
@@ -491,6 +575,7 @@ void main() {
         walker.move(state, wx * step, wz * step, state);
       }
       const d = drawView(state.eye, yaw, pitch, canvas.width, canvas.height);
+      if (d.order.waiting && fetchCells) cells.load(d.order.waiting);
       const ms = performance.now() - d.t0;
       frameMs = frameMs === 0 ? ms : 0.9 * frameMs + 0.1 * ms;
       if (dt > 0) fps = fps === 0 ? 1 / dt : 0.95 * fps + 0.05 / dt;
@@ -502,8 +587,17 @@ void main() {
       requestAnimationFrame(frame);
     };
     requestAnimationFrame(frame);
+    // The cell the walk starts in first, then the rest in the background (&prefetch=0: only the
+    // cells the walk enters, each when it gets there).
+    if (fetchCells) {
+      const first = W.cellAt(scene, state.eye);
+      const then = () => { if (params.get('prefetch') !== '0') cells.prefetch(() => state.eye); };
+      if (first && !first.tree) cells.load(first).then(then, () => {});
+      else then();
+    }
   }
 
+  const fail = (e) => showError(e instanceof W.ExportError ? e.message : 'walkvis: ' + e.message);
   let parseStart = 0;
   loadBytes()
     .then((buffer) => {
@@ -511,14 +605,14 @@ void main() {
       return W.parseExport(buffer, 'walkvis.bin');
     })
     .then((scene) => {
-      // Load time: from the navigation's start to the data read and checked (bytes fetched or
+      // Load time: from the navigation's start to walkvis.bin read and checked (bytes fetched or
       // decoded from base64, sections checksummed and inflated, arrays mapped); its parts: this
-      // script started, the bytes in hand, the parse.
+      // script started, the bytes in hand, the parse. View cells come after (cellLoader).
       document.body.dataset.loadMs = performance.now().toFixed(1);
       document.body.dataset.scriptMs = scriptMs.toFixed(1);
       document.body.dataset.bytesMs = parseStart.toFixed(1);
       document.body.dataset.parseMs = (performance.now() - parseStart).toFixed(1);
-      start(scene);
+      start(scene, cellLoader(scene, fail));
     })
-    .catch((e) => showError(e instanceof W.ExportError ? e.message : 'walkvis: ' + e.message));
+    .catch(fail);
 })();

@@ -2,7 +2,8 @@
 // drawing each frame in the painter's order of its HFD tree (James & Day 1998 [JamesDay1998HFD],
 // docs/REFERENCES.md) with the depth test off. The rules are the C++ walkthrough's, ported line
 // for line so that a page and `walkvis render` agree (docs/web/README.md):
-//   format      the export's sections (docs/web/README.md, "Format"), checksummed (FNV-1a 64)
+//   format      the export's containers, walkvis.bin and one per view cell (docs/web/README.md,
+//               "Format"), checksummed (FNV-1a 64)
 //   planeSign   exact sign of n·p − d (bsp/exact_sign.h: a filter, then an exact expansion sum)
 //   frameOrder  walkthrough/frame.cpp: the level whose height plane holds the eye, its view cell,
 //               the tree's root-to-leaf walk (pfd_hfd/pfd.cpp); the BSP's back-to-front order
@@ -15,7 +16,7 @@
 (function (global) {
   // ---- format -------------------------------------------------------------------------------
   const kMagic = 'WALKVISW';
-  const kVersion = 2;
+  const kVersion = 3;
   const kHeaderBytes = 40;
   const kTocEntryBytes = 40;
   const kRaw = 0, kDeflate = 1;  // a section's encoding (deflate: a zlib stream, RFC 1950)
@@ -66,9 +67,11 @@
     return out.buffer;
   }
 
-  // Reads an export (a promise of the scene: deflated sections inflate asynchronously); rejects
-  // with an ExportError naming `name` and what is wrong.
-  async function parseExport(buffer, name) {
+  // Reads a container (walkvis.bin or a cell file): header, table, every section checked against
+  // its checksum as stored, then the deflated ones inflated. Resolves to its sections, each with
+  // the buffer and offset of its bytes (the file itself for a raw one), and the checksum of its
+  // table as 16 hex digits; rejects with an ExportError naming `name` and what is wrong.
+  async function readContainer(buffer, name) {
     const fail = (what) => { throw new ExportError(name + ': ' + what); };
     const bytes = new Uint8Array(buffer);
     if (bytes.length < kHeaderBytes) fail('truncated (' + bytes.length + ' bytes, no header)');
@@ -86,8 +89,6 @@
     const tocSum = fnv1a64(toc);
     if (tocSum[0] !== view.getUint32(24, true) || tocSum[1] !== view.getUint32(28, true))
       fail('checksum mismatch in the table of sections');
-    // Every section checked against its checksum as stored, then the deflated ones inflated; each
-    // section's arrays are then views of `buffer` (the file for a raw one) from `offset`.
     const sections = [];
     for (let k = 0; k < count; ++k) {
       const at = kHeaderBytes + k * kTocEntryBytes;
@@ -113,6 +114,16 @@
       }
       s.buffer = raw, s.offset = 0;
     }));
+    const hex = (w) => w.toString(16).padStart(8, '0');
+    return { sections, checksum: hex(tocSum[1]) + hex(tocSum[0]) };
+  }
+
+  // Reads walkvis.bin (a promise of the scene). Its view cells are listed in scene.cells with no
+  // tree until attachCell hands one over. Rejects with an ExportError naming `name`.
+  async function parseExport(buffer, name) {
+    const fail = (what) => { throw new ExportError(name + ': ' + what); };
+    const { sections } = await readContainer(buffer, name);
+    const bytes = new Uint8Array(buffer);
     const find = (tag) => {
       const s = sections.filter((x) => x.tag === tag);
       if (s.length === 0) fail('no ' + tag + ' section');
@@ -138,6 +149,7 @@
       bsp_nodes: (() => { const s = find('BNOD')[0]; return i32(s, 0, s.length / 4); })(),
       bsp_planes: f64(find('BPLN')[0]),
       levels: [],
+      cells: [],
       walk: null,
       bytes: bytes.length,
     };
@@ -155,14 +167,35 @@
         fail('BSP node ' + k + ' out of range');
     }
     scene.walk = parseWalk(f64(find('WALK')[0]), fail);
-    const cells = sections.filter((x) => x.tag === 'CELL');
     for (const l of meta.levels) scene.levels.push({ floor_y: l.floor_y, height: l.height, cells: [] });
-    for (const s of cells) {
-      const cell = parseCell(s.buffer, s, n, fail);
-      if (cell.level >= scene.levels.length) fail('a view cell of level ' + cell.level + ', which does not exist');
-      scene.levels[cell.level].cells.push(cell);
-    }
+    if (!Array.isArray(meta.cells)) fail('META lists no view cells');
+    meta.cells.forEach((c, k) => {
+      const box = c.box;
+      if (!(Number.isInteger(c.level) && c.level >= 0 && c.level < scene.levels.length) ||
+          c.file !== 'cells/' + k + '.bin' || !/^[0-9a-f]{16}$/.test(c.checksum) ||
+          !(box === null || (Array.isArray(box) && box.length === 4 && box.every(Number.isFinite))))
+        fail('view cell ' + k + ' in META is malformed');
+      const cell = { index: k, level: c.level, box, file: c.file, checksum: c.checksum, tree: null };
+      scene.cells.push(cell);
+      scene.levels[c.level].cells.push(cell);
+    });
     return scene;
+  }
+
+  // Hands view cell k's file (cells/k.bin: one CELL section) to the scene: checked as a container,
+  // then as this export's cell k (the checksum of its table is the one META gives) and as a tree.
+  // Resolves to the cell; rejects with an ExportError naming the file.
+  async function attachCell(scene, k, buffer) {
+    const cell = scene.cells[k];
+    const fail = (what) => { throw new ExportError(cell.file + ': ' + what); };
+    const { sections, checksum } = await readContainer(buffer, cell.file);
+    if (sections.length !== 1 || sections[0].tag !== 'CELL') fail('not a view cell (one CELL section expected)');
+    if (checksum !== cell.checksum) fail("not this export's view cell " + k + ' (walkvis.bin names another file)');
+    const tree = parseCell(sections[0].buffer, sections[0], scene.meta.fragments, fail);
+    if (tree.level !== cell.level) fail('a view cell of level ' + tree.level + ', META says ' + cell.level);
+    if (String(tree.box) !== String(cell.box)) fail("its box is not the one META gives");
+    cell.tree = tree;
+    return cell;
   }
 
   // WALK: doubles; levels (floor_y, pieces of rings), then connections (patches: plane, ring).
@@ -436,22 +469,34 @@
   // A reusable frame list: no allocation per frame.
   function makeOrder(scene) {
     return { ids: new Uint32Array(Math.max(scene.meta.fragments, 1) * 2), n: 0, tests: 0, object_tests: 0,
-             stack: new Int32Array(2 * Math.max(scene.meta.bsp_nodes, 1) + 2), on: [0, 0, 0], level: -1, used: 'bsp' };
+             stack: new Int32Array(2 * Math.max(scene.meta.bsp_nodes, 1) + 2), on: [0, 0, 0], level: -1, used: 'bsp',
+             waiting: null };
+  }
+
+  // The view cell whose box holds the eye on its level's height plane (as FrameBuilder finds it),
+  // or null: off every height plane (stairs) or outside every box.
+  function cellAt(scene, eye) {
+    const l = levelAt(scene, eye);
+    return l >= 0 ? findCell(scene.levels[l], eye) : null;
   }
 
   // FrameBuilder::build for mode hfd, culling none: the fragments of the frame, first drawn first.
+  // Where the eye's view cell has no tree yet (its file not yet in: attachCell), the BSP order,
+  // which draws the same image with every hidden fragment too; out.waiting is then that cell.
   function frameOrder(scene, eye, out) {
     out.n = 0;
     out.tests = 0;
     out.object_tests = 0;
     out.level = -1;
     out.used = 'bsp';
+    out.waiting = null;
     const l = levelAt(scene, eye);
     if (l >= 0) {
       const level = scene.levels[l];
       const on = out.on;  // the eye snapped onto the height plane: the few ulps a decimal path adds
       on[0] = eye[0], on[1] = level.height, on[2] = eye[2];
-      const t = findCell(level, on);
+      const c = findCell(level, on);
+      const t = c && c.tree;
       if (t && t.nodes.length > 0) {
         hfdQuery(t, on, out);
         out.tests += out.object_tests;
@@ -459,6 +504,7 @@
         out.used = 'hfd';
         return out;
       }
+      if (c && !t) out.waiting = c;
     }
     bspOrder(scene, eye, out);
     return out;
@@ -735,7 +781,7 @@
     return m;
   }
 
-  const api = { parseExport, ExportError, fnv1a64, planeSign, planeSignExact, frameOrder, makeOrder, levelAt,
+  const api = { parseExport, attachCell, cellAt, ExportError, fnv1a64, planeSign, planeSignExact, frameOrder, makeOrder, levelAt,
                 bspOrder, Walker, makeWalkState, clipMatrix };
   if (typeof module === 'object' && module.exports) module.exports = api;
   else global.walkvis = api;

@@ -3,7 +3,9 @@
 // (body[data-drawn] or body[data-error], at most TIMEOUT_S seconds: the environment's
 // WALKVIS_BENCH_TIMEOUT, default 600) and prints one JSON line per URL, {"url", "page"}; page: from the navigation's start, the page's HTML
 // received (document_ms), page.js started (script_ms), the export's bytes in hand (bytes_ms), the
-// data read and checked (load_ms); parse_ms = load_ms - bytes_ms; and the page's bench record.
+// data read and checked (load_ms); parse_ms = load_ms - bytes_ms; for a view, its view cell in
+// hand (cells_ms) and the view drawn (drawn_ms), the cells fetched and the order used; and the
+// page's bench record.
 // With WALKVIS_BENCH_SHOT=FILE.png, a screenshot of the view (640×480 from the top left) after
 // each page: a ?frame view's overlay then shows real frame times.
 //
@@ -57,7 +59,9 @@ async function main() {
     if (!(d.drawn || d.error)) return '';
     const nav = performance.getEntriesByType('navigation')[0];
     return JSON.stringify({ load_ms: Number(d.loadMs), document_ms: nav ? nav.responseEnd : null,
-      script_ms: Number(d.scriptMs), bytes_ms: Number(d.bytesMs), parse_ms: Number(d.parseMs), error: d.error || null,
+      script_ms: Number(d.scriptMs), bytes_ms: Number(d.bytesMs), parse_ms: Number(d.parseMs),
+      cells_ms: d.cellsMs ? Number(d.cellsMs) : null, drawn_ms: d.drawnMs ? Number(d.drawnMs) : null,
+      cells_loaded: d.cellsLoaded || null, used: d.used || null, error: d.error || null,
       bench: d.bench ? JSON.parse(d.bench) : null }); })()`;
   for (const url of urls) {
     // Navigated from a started browser, so that the page's times (from its navigation's start)

@@ -509,6 +509,7 @@ void main() {
 
     if (view) {
       cellsFor([view.eye]).then(() => {
+        document.body.dataset.cellsMs = performance.now().toFixed(1);  // the view's cell in hand
         const [w, h] = parseSize(params.get('size'));
         canvas.width = w, canvas.height = h;
         canvas.style.width = w + 'px', canvas.style.height = h + 'px';
@@ -520,6 +521,7 @@ void main() {
         } else {
           overlayEl.style.display = 'none';
         }
+        document.body.dataset.drawnMs = performance.now().toFixed(1);
         document.body.dataset.drawn = '1';
         document.body.dataset.polygons = String(d.order.n);
         document.body.dataset.tests = String(d.order.tests);

@@ -50,15 +50,19 @@ for line in open(os.path.join(work, 'bench.jsonl')):
     scene, _, variant = folder.rpartition('_')
     rows.setdefault((scene, variant, src), []).append(r['page'])
 med = statistics.median
-print("Load (medians, ms from the navigation's start): page.js started, bytes in hand, data read and checked (load).")
-print('| scene | export | from | bytes read | page.js | bytes | load | parse |')
-print('|---|---|---|---|---|---|---|---|')
+print("Load (medians, ms from the navigation's start): page.js started, bytes in hand, walkvis.bin read and checked (load),")
+print("the view cells of the bench keys in (cells).")
+print('| scene | export | from | bytes read | page.js | bytes | load | parse | cells |')
+print('|---|---|---|---|---|---|---|---|---|')
 for (scene, variant, src), pages in rows.items():
     d = os.path.join(work, scene + '_' + variant)
-    f = 'walkvis-data.js' if src == 'file' else 'walkvis.bin'
+    f, ext = ('walkvis-data.js', '.js') if src == 'file' else ('walkvis.bin', '.bin')
+    cells = (pages[0].get('cells_loaded') or '').split(',')
+    read = os.path.getsize(os.path.join(d, f)) + sum(os.path.getsize(os.path.join(d, 'cells', k + ext)) for k in cells if k)
     m = lambda key: med(p[key] for p in pages)
-    print('| {} | {} | {} | {:,} B ({}) | {:.0f} | {:.0f} | {:.0f} | {:.0f} |'.format(
-        scene, variant, src, os.path.getsize(os.path.join(d, f)), f, m('script_ms'), m('bytes_ms'), m('load_ms'), m('parse_ms')))
+    print('| {} | {} | {} | {:,} B ({} and {} cells) | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.0f} |'.format(
+        scene, variant, src, read, f, len([k for k in cells if k]), m('script_ms'), m('bytes_ms'), m('load_ms'),
+        m('parse_ms'), m('cells_ms')))
 print()
 print('Frames (medians over all opens; 640x480, 20 tour keys x 5 repetitions per open).')
 print('| scene | fragments | floor | z-buffer | BSP | HFD (order + GL calls + wait) | HFD order (mean) | BSP order (mean) | drawn | HFD speed-up over the z-buffer |')

@@ -281,6 +281,48 @@ bool edgePixel(const Image& image, int x, int y) {
   return false;
 }
 
+// Screenshots of tour keys 0..frames-1 of the office page (`query` added to each URL) against the
+// ids images `walkvis render` wrote into `ref`: a differing pixel off every edge of the reference
+// is a failure (the first five are named).
+struct IdsComparison {
+  size_t pixels = 0, differing = 0, inner_differing = 0;
+  std::set<uint32_t> ids;  // of the reference
+};
+IdsComparison compareWithRender(const fs::path& dir, const fs::path& ref, int frames, const std::string& query,
+                                const std::string& shot_prefix) {
+  IdsComparison c;
+  const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
+  for (int k = 0; k < frames; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", k);
+    const fs::path shot = dir / (shot_prefix + name);
+    // The window is larger than the canvas (headless Chromium lays a window below about 300 pixels
+    // wide out oddly); the canvas is the screenshot's top-left corner.
+    if (run(chromium(dir) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=" + shot.string() +
+            " 'file://" + (dir / "office" / "index.html").string() + "?frame=" + std::to_string(k) + "&ids=1&size=" +
+            size + query + "' > /dev/null 2>&1") != 0) {
+      ADD_FAILURE() << name << ": chromium failed";
+      return c;
+    }
+    const Image a = readPng((ref / name).string()), b = readPng(shot.string());
+    if (a.width != kWidth || b.width < kWidth || b.height < kHeight) {
+      ADD_FAILURE() << name << ": image sizes " << a.width << " and " << b.width << "x" << b.height;
+      return c;
+    }
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        ++c.pixels;
+        c.ids.insert(idAt(a, x, y));
+        if (idAt(a, x, y) == idAt(b, x, y)) continue;
+        ++c.differing;
+        if (!edgePixel(a, x, y) && ++c.inner_differing <= 5)
+          ADD_FAILURE() << name << " (" << x << ", " << y << "): page id " << idAt(b, x, y) << ", render id "
+                        << idAt(a, x, y) << " away from any edge";
+      }
+  }
+  return c;
+}
+
 TEST_F(WebExport, PageDrawsWhatRenderDraws) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
   constexpr int kFrames = 24;
@@ -299,41 +341,12 @@ TEST_F(WebExport, PageDrawsWhatRenderDraws) {
   EXPECT_NE(readText(dom).find("data-drawn=\"1\""), std::string::npos) << readText(dom);
   EXPECT_EQ(readText(err).find("CONSOLE"), std::string::npos) << readText(err);
 
-  size_t pixels = 0, differing = 0, inner_differing = 0;
-  std::set<uint32_t> ids;
-  for (int k = 0; k < kFrames; ++k) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%05d.png", k);
-    const fs::path shot = dir_ / ("page_" + std::string(name));
-    // The window is larger than the canvas (headless Chromium lays a window below about 300 pixels
-    // wide out oddly); the canvas is the screenshot's top-left corner.
-    ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=" + shot.string() + " 'file://" +
-                  (web / "index.html").string() + "?frame=" + std::to_string(k) + "&ids=1&size=" + size +
-                  "' > /dev/null 2>&1"),
-              0);
-    const Image a = readPng((ref / name).string()), b = readPng(shot.string());
-    ASSERT_EQ(a.width, kWidth) << name;
-    ASSERT_GE(b.width, kWidth) << name;
-    ASSERT_GE(b.height, kHeight) << name;
-    for (int y = 0; y < kHeight; ++y)
-      for (int x = 0; x < kWidth; ++x) {
-        ++pixels;
-        ids.insert(idAt(a, x, y));
-        if (idAt(a, x, y) == idAt(b, x, y)) continue;
-        ++differing;
-        if (!edgePixel(a, x, y)) {
-          ++inner_differing;
-          if (inner_differing <= 5)
-            ADD_FAILURE() << name << " (" << x << ", " << y << "): page id " << idAt(b, x, y) << ", render id "
-                          << idAt(a, x, y) << " away from any edge";
-        }
-      }
-  }
+  const IdsComparison c = compareWithRender(dir_, ref, kFrames, "", "page_");
   std::printf("page against render: %d frames, %zu pixels, %zu differing (%zu off edges), %zu distinct ids\n",
-              kFrames, pixels, differing, inner_differing, ids.size());
-  EXPECT_EQ(inner_differing, 0u);
-  EXPECT_LE(differing, pixels / 100);
-  EXPECT_GT(ids.size(), 30u) << "the frames must show the building";
+              kFrames, c.pixels, c.differing, c.inner_differing, c.ids.size());
+  EXPECT_EQ(c.inner_differing, 0u);
+  EXPECT_LE(c.differing, c.pixels / 100);
+  EXPECT_GT(c.ids.size(), 30u) << "the frames must show the building";
 }
 
 // `bin` with one byte flipped in its largest deflated section and every checksum made to agree
@@ -452,32 +465,12 @@ TEST_F(WebExport, WithoutItsCellThePageDrawsTheBspOrder) {
   const std::string page = readText(dom);
   EXPECT_NE(page.find("data-used=\"bsp\""), std::string::npos) << page.substr(0, 400);
   EXPECT_EQ(page.find("data-cells-loaded"), std::string::npos) << page.substr(0, 400);
-  size_t pixels = 0, differing = 0, inner_differing = 0;
-  for (int k = 0; k < kFrames; ++k) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%05d.png", k);
-    const fs::path shot = dir_ / ("bsp_page_" + std::string(name));
-    ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --window-size=400,300 --screenshot=" + shot.string() +
-                  " 'file://" + (web / "index.html").string() + "?frame=" + std::to_string(k) +
-                  "&cells=none&ids=1&size=" + size + "' > /dev/null 2>&1"),
-              0);
-    const Image a = readPng((ref / name).string()), b = readPng(shot.string());
-    ASSERT_GE(b.width, kWidth) << name;
-    ASSERT_GE(b.height, kHeight) << name;
-    for (int y = 0; y < kHeight; ++y)
-      for (int x = 0; x < kWidth; ++x) {
-        ++pixels;
-        if (idAt(a, x, y) == idAt(b, x, y)) continue;
-        ++differing;
-        if (!edgePixel(a, x, y) && ++inner_differing <= 5)
-          ADD_FAILURE() << name << " (" << x << ", " << y << "): page id " << idAt(b, x, y) << ", render id "
-                        << idAt(a, x, y) << " away from any edge";
-      }
-  }
+  const IdsComparison c = compareWithRender(dir_, ref, kFrames, "&cells=none", "bsp_page_");
   std::printf("BSP page against render --mode bsp: %d frames, %zu pixels, %zu differing (%zu off edges)\n", kFrames,
-              pixels, differing, inner_differing);
-  EXPECT_EQ(inner_differing, 0u);
-  EXPECT_LE(differing, pixels / 100);
+              c.pixels, c.differing, c.inner_differing);
+  EXPECT_EQ(c.inner_differing, 0u);
+  EXPECT_LE(c.differing, c.pixels / 100);
+  EXPECT_GT(c.ids.size(), 10u) << "the frames must show the building";
 }
 
 TEST_F(WebExport, BrokenExportShowsAMessage) {

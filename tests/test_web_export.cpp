@@ -451,7 +451,7 @@ TEST_F(WebExport, PageLoadsFromAServer) {
 // PageDrawsWhatRenderDraws.
 TEST_F(WebExport, WithoutItsCellThePageDrawsTheBspOrder) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
-  constexpr int kFrames = 6;
+  constexpr int kFrames = 4;
   const fs::path ref = dir_ / "render_bsp", web = dir_ / "office";
   const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
   ASSERT_EQ(run(kBinary + " render " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +

@@ -282,16 +282,22 @@ bool edgePixel(const Image& image, int x, int y) {
 }
 
 // Screenshots of tour keys 0..frames-1 of the office page (`query` added to each URL) against the
-// ids images `walkvis render` wrote into `ref`: a differing pixel off every edge of the reference
-// is a failure (the first five are named).
+// ids images `walkvis render --ids` (with `render_options`) writes into `ref`: a differing pixel
+// off every edge of the reference is a failure (the first five are named).
 struct IdsComparison {
   size_t pixels = 0, differing = 0, inner_differing = 0;
   std::set<uint32_t> ids;  // of the reference
 };
-IdsComparison compareWithRender(const fs::path& dir, const fs::path& ref, int frames, const std::string& query,
-                                const std::string& shot_prefix) {
+IdsComparison compareWithRender(const fs::path& dir, const fs::path& ref, const std::string& render_options, int frames,
+                                const std::string& query, const std::string& shot_prefix) {
   IdsComparison c;
   const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
+  if (run(kBinary + " render " + (dir / "office.hfd").string() + " --scene " + quote(kOffice) + " " + render_options +
+          " --ids --objects none --frames " + std::to_string(frames) + " --size " + size + " --out " + ref.string() +
+          " > /dev/null 2>&1") != 0) {
+    ADD_FAILURE() << "walkvis render failed";
+    return c;
+  }
   for (int k = 0; k < frames; ++k) {
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05d.png", k);
@@ -326,12 +332,8 @@ IdsComparison compareWithRender(const fs::path& dir, const fs::path& ref, int fr
 TEST_F(WebExport, PageDrawsWhatRenderDraws) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
   constexpr int kFrames = 24;
-  const fs::path ref = dir_ / "render", web = dir_ / "office";
+  const fs::path web = dir_ / "office";
   const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
-  ASSERT_EQ(run(kBinary + " render " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
-                " --ids --objects none --frames " + std::to_string(kFrames) + " --size " + size + " --out " +
-                ref.string() + " > /dev/null 2>&1"),
-            0);
   // Loads with no console message at all (errors, warnings, logs) and says it drew.
   const fs::path dom = dir_ / "dom.html", err = dir_ / "chromium.err";
   ASSERT_EQ(run(chromium(dir_) + "--enable-logging=stderr --v=0 --virtual-time-budget=10000 --dump-dom 'file://" +
@@ -341,7 +343,7 @@ TEST_F(WebExport, PageDrawsWhatRenderDraws) {
   EXPECT_NE(readText(dom).find("data-drawn=\"1\""), std::string::npos) << readText(dom);
   EXPECT_EQ(readText(err).find("CONSOLE"), std::string::npos) << readText(err);
 
-  const IdsComparison c = compareWithRender(dir_, ref, kFrames, "", "page_");
+  const IdsComparison c = compareWithRender(dir_, dir_ / "render", "", kFrames, "", "page_");
   std::printf("page against render: %d frames, %zu pixels, %zu differing (%zu off edges), %zu distinct ids\n",
               kFrames, c.pixels, c.differing, c.inner_differing, c.ids.size());
   EXPECT_EQ(c.inner_differing, 0u);
@@ -452,12 +454,8 @@ TEST_F(WebExport, PageLoadsFromAServer) {
 TEST_F(WebExport, WithoutItsCellThePageDrawsTheBspOrder) {
   if (!have("chromium")) GTEST_SKIP() << "chromium is not installed";
   constexpr int kFrames = 4;
-  const fs::path ref = dir_ / "render_bsp", web = dir_ / "office";
+  const fs::path web = dir_ / "office";
   const std::string size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
-  ASSERT_EQ(run(kBinary + " render " + (dir_ / "office.hfd").string() + " --scene " + quote(kOffice) +
-                " --mode bsp --ids --objects none --frames " + std::to_string(kFrames) + " --size " + size + " --out " +
-                ref.string() + " > /dev/null 2>&1"),
-            0);
   const fs::path dom = dir_ / "bsp_dom.html";
   ASSERT_EQ(run(chromium(dir_) + "--virtual-time-budget=10000 --dump-dom 'file://" + (web / "index.html").string() +
                 "?frame=2&cells=none&size=" + size + "' > " + dom.string() + " 2> /dev/null"),
@@ -465,7 +463,7 @@ TEST_F(WebExport, WithoutItsCellThePageDrawsTheBspOrder) {
   const std::string page = readText(dom);
   EXPECT_NE(page.find("data-used=\"bsp\""), std::string::npos) << page.substr(0, 400);
   EXPECT_EQ(page.find("data-cells-loaded"), std::string::npos) << page.substr(0, 400);
-  const IdsComparison c = compareWithRender(dir_, ref, kFrames, "&cells=none", "bsp_page_");
+  const IdsComparison c = compareWithRender(dir_, dir_ / "render_bsp", "--mode bsp", kFrames, "&cells=none", "bsp_page_");
   std::printf("BSP page against render --mode bsp: %d frames, %zu pixels, %zu differing (%zu off edges)\n", kFrames,
               c.pixels, c.differing, c.inner_differing);
   EXPECT_EQ(c.inner_differing, 0u);

@@ -224,8 +224,6 @@ std::string tocChecksumHex(const std::vector<uint8_t>& container) {
   return text;
 }
 
-std::string cellFileName(uint32_t k) { return "cells/" + std::to_string(k) + ".bin"; }
-
 void appendBase64(std::string& out, std::span<const uint8_t> bytes) {
   static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   size_t i = 0;
@@ -250,6 +248,16 @@ void appendBase64(std::string& out, std::span<const uint8_t> bytes) {
   }
 }
 
+// `call` followed by the base64 of `bytes` in quotes and the closing parenthesis: a script that
+// hands the bytes to the page.
+std::string scriptCall(const std::string& call, std::span<const uint8_t> bytes) {
+  std::string script = call + "\"";
+  script.reserve(bytes.size() * 4 / 3 + call.size() + 8);
+  appendBase64(script, bytes);
+  script += "\");\n";
+  return script;
+}
+
 }  // namespace
 
 WebExportFiles webExportFiles(const World& world, const WebExportOptions& options, WebExportReport* report) {
@@ -259,33 +267,19 @@ WebExportFiles webExportFiles(const World& world, const WebExportOptions& option
   const Walker walker(world.scene, bsp, options.move);
   const CameraPath tour = automaticTour(world.scene, bsp, options.tour_frames);
   WebExportFiles files;
-  if (report) report->sections.clear();
-  auto count = [&](const std::vector<Section>& sections) {
-    if (!report) return;
-    for (const Section& s : sections) {
-      const std::string tag(s.tag, 4);
-      auto at = std::find_if(report->sections.begin(), report->sections.end(),
-                             [&](const WebSectionBytes& b) { return b.tag == tag; });
-      if (at == report->sections.end()) at = report->sections.insert(report->sections.end(), {tag, 0, 0});
-      at->bytes += s.length;
-      at->stored += s.out.bytes.size();
-    }
-  };
 
-  // Each view cell a container of its own (cells/K.bin), named in META with its level, box and
+  // Each view cell a container of its own (cells/K.bin), listed in META with its level, box and
   // the checksum of its table.
   nlohmann::json cells = nlohmann::json::array();
+  WebSectionBytes cell_bytes{"CELL", 0, 0};
   for (uint32_t l = 0; l < world.trees.levels.size(); ++l) {
     for (const PfdTree& t : world.trees.levels[l].cells) {
       std::vector<Section> one(1, section("CELL"));
       one[0].out = cellSection(t, l);
       files.cells.push_back(containerBytes(one, options.deflate));
-      count(one);
-      nlohmann::json c = {{"level", l},
-                          {"file", cellFileName(static_cast<uint32_t>(cells.size()))},
-                          {"bytes", one[0].length},
-                          {"stored", files.cells.back().size()},
-                          {"checksum", tocChecksumHex(files.cells.back())}};
+      cell_bytes.bytes += one[0].length;
+      cell_bytes.stored += one[0].out.bytes.size();
+      nlohmann::json c = {{"level", l}, {"checksum", tocChecksumHex(files.cells.back())}};
       c["box"] = t.cell ? nlohmann::json{t.cell->lo.x, t.cell->lo.y, t.cell->hi.x, t.cell->hi.y} : nlohmann::json();
       cells.push_back(std::move(c));
     }
@@ -342,11 +336,9 @@ WebExportFiles webExportFiles(const World& world, const WebExportOptions& option
   }
   files.binary = containerBytes(sections, options.deflate);
   if (report) {
-    // walkvis.bin's sections in file order, then CELL (every cell file together).
-    std::vector<WebSectionBytes> cell_bytes = std::move(report->sections);
     report->sections.clear();
-    count(sections);
-    report->sections.insert(report->sections.end(), cell_bytes.begin(), cell_bytes.end());
+    for (const Section& s : sections) report->sections.push_back({std::string(s.tag, 4), s.length, s.out.bytes.size()});
+    report->sections.push_back(cell_bytes);
     report->binary_bytes = files.binary.size();
     report->cell_bytes = 0;
     for (const auto& c : files.cells) report->cell_bytes += c.size();
@@ -356,20 +348,10 @@ WebExportFiles webExportFiles(const World& world, const WebExportOptions& option
   return files;
 }
 
-std::string webDataScript(std::span<const uint8_t> bytes) {
-  std::string script = "walkvisData(\"";
-  script.reserve(bytes.size() * 4 / 3 + 64);
-  appendBase64(script, bytes);
-  script += "\");\n";
-  return script;
-}
+std::string webDataScript(std::span<const uint8_t> bytes) { return scriptCall("walkvisData(", bytes); }
 
 std::string webCellScript(uint32_t k, std::span<const uint8_t> bytes) {
-  std::string script = "walkvisCell(" + std::to_string(k) + ", \"";
-  script.reserve(bytes.size() * 4 / 3 + 64);
-  appendBase64(script, bytes);
-  script += "\");\n";
-  return script;
+  return scriptCall("walkvisCell(" + std::to_string(k) + ", ", bytes);
 }
 
 WebExportReport writeWebExport(const World& world, const std::string& dir, const WebExportOptions& options) {

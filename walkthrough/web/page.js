@@ -35,28 +35,30 @@
     return bytes.buffer;
   }
 
-  function loadBytes() {
+  // The bytes of an export file: fetched from a server; from file://, where browsers refuse fetch,
+  // its script form run, which hands them over in base64 to the function `handOver` installs.
+  function fileBytes(file, script, handOver) {
     if (location.protocol !== 'file:') {
-      return fetch('walkvis.bin').then((r) => {
-        if (!r.ok) throw new W.ExportError('walkvis.bin: ' + r.status + ' ' + r.statusText);
+      return fetch(file).then((r) => {
+        if (!r.ok) throw new W.ExportError(file + ': ' + r.status + ' ' + r.statusText);
         return r.arrayBuffer();
       });
     }
     return new Promise((resolve, reject) => {
       let done = false;
-      window.walkvisData = (text) => {
+      handOver((text) => {
         done = true;
         try {
           resolve(decodeBase64(text));
         } catch (e) {
-          reject(new W.ExportError('walkvis-data.js: not base64 (' + e.message + ')'));
+          reject(new W.ExportError(script + ': not base64 (' + e.message + ')'));
         }
-      };
+      });
       const s = document.createElement('script');
-      s.src = 'walkvis-data.js';
-      s.onerror = () => reject(new W.ExportError('walkvis-data.js: missing or unreadable beside index.html'));
+      s.src = script;
+      s.onerror = () => reject(new W.ExportError(script + ': missing or unreadable beside index.html'));
       s.onload = () => {
-        if (!done) reject(new W.ExportError('walkvis-data.js: truncated or malformed (it did not hand over the data)'));
+        if (!done) reject(new W.ExportError(script + ': truncated or malformed (it did not hand over the data)'));
       };
       document.head.appendChild(s);
     });
@@ -70,38 +72,11 @@
   // message (onError).
   function cellLoader(scene, onError) {
     const pending = new Map();  // cell index → promise of the cell
-    const scripts = new Map();  // cell index → the file:// script's hand-over
+    const handOvers = new Map();  // cell index → what takes its file:// script's data
     const loaded = [];
-    window.walkvisCell = (k, text) => {
-      const s = scripts.get(k);
-      if (!s) return;
-      s.done = true;
-      try {
-        s.resolve(decodeBase64(text));
-      } catch (e) {
-        s.reject(new W.ExportError('cells/' + k + '.js: not base64 (' + e.message + ')'));
-      }
-    };
-    const bytes = (cell) => {
-      if (location.protocol !== 'file:') {
-        return fetch(cell.file).then((r) => {
-          if (!r.ok) throw new W.ExportError(cell.file + ': ' + r.status + ' ' + r.statusText);
-          return r.arrayBuffer();
-        });
-      }
-      const js = 'cells/' + cell.index + '.js';
-      return new Promise((resolve, reject) => {
-        const hand = { resolve, reject, done: false };
-        scripts.set(cell.index, hand);
-        const s = document.createElement('script');
-        s.src = js;
-        s.onerror = () => reject(new W.ExportError(js + ': missing or unreadable beside index.html'));
-        s.onload = () => {
-          if (!hand.done) reject(new W.ExportError(js + ': truncated or malformed (it did not hand over the data)'));
-        };
-        document.head.appendChild(s);
-      });
-    };
+    window.walkvisCell = (k, text) => { if (handOvers.has(k)) handOvers.get(k)(text); };
+    const bytes = (cell) =>
+      fileBytes(cell.file, 'cells/' + cell.index + '.js', (take) => handOvers.set(cell.index, take));
     const load = (cell) => {
       let p = pending.get(cell.index);
       if (!p) {
@@ -602,7 +577,7 @@ void main() {
 
   const fail = (e) => showError(e instanceof W.ExportError ? e.message : 'walkvis: ' + e.message);
   let parseStart = 0;
-  loadBytes()
+  fileBytes('walkvis.bin', 'walkvis-data.js', (take) => { window.walkvisData = take; })
     .then((buffer) => {
       parseStart = performance.now();
       return W.parseExport(buffer, 'walkvis.bin');

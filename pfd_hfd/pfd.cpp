@@ -4,6 +4,7 @@
 // that appends each node's runs; the frame-coherent form keeps the prefix of the order that the
 // eye's move did not change (Kumar et al. 1996 [Kumar1996] track the view point the same way).
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include <glm/common.hpp>
@@ -302,6 +303,39 @@ glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state) {
     }
   }
   return tree.region.front().front();
+}
+
+PfdQueryTiming timePfdQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) {
+  PfdQueryTiming t;
+  if (tree.region.empty() || eyes == 0) return t;
+  t.eyes = eyes;
+  std::vector<glm::dvec3> points;
+  uint64_t state = 12345;
+  for (uint32_t i = 0; i < eyes; ++i) {
+    const glm::dvec2 p = samplePfdRegion(tree, state);
+    points.emplace_back(p.x, tree.height, p.y);
+  }
+  std::vector<uint32_t> order;
+  order.reserve(bsp.fragments.size());
+  std::vector<PfdRun> runs;
+  std::vector<PfdRefRange> lists;
+  // Mean ns per eye of query(eye), and the mean of what it returns (the size of its output).
+  auto timeEach = [&](auto&& query, double& ns, double& mean) {
+    uint64_t total = 0;
+    const auto start = std::chrono::steady_clock::now();
+    for (const glm::dvec3& e : points) total += query(e);
+    ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / eyes;
+    mean = static_cast<double>(total) / eyes;
+  };
+  double ids_mean = 0.0;
+  timeEach([&](const glm::dvec3& e) { pfdQuery(tree, e, order); return order.size(); }, t.pfd_ns, ids_mean);
+  uint64_t object_tests = 0;
+  for (const glm::dvec3& e : points) object_tests += pfdQuery(tree, e, order).object_tests;
+  t.object_tests_mean = static_cast<double>(object_tests) / eyes;
+  timeEach([&](const glm::dvec3& e) { backToFront(bsp, e, order, true); return order.size(); }, t.bsp_ns, ids_mean);
+  timeEach([&](const glm::dvec3& e) { pfdQueryRuns(tree, e, runs); return runs.size(); }, t.runs_ns, t.runs_mean);
+  timeEach([&](const glm::dvec3& e) { pfdQueryRefs(tree, e, lists); return lists.size(); }, t.refs_ns, t.refs_mean);
+  return t;
 }
 
 void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed) {

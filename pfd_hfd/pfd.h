@@ -150,6 +150,17 @@ struct PfdBudgetError : Error {
   double area_fraction = 0.0;
 };
 
+// Mean wall time of one query at random eyes of a tree's region (timePfdQueries), for the build's
+// report. Measured by whoever built the tree, right after, and carried with its outcome
+// (pfdCellOutcomeBytes, the journal); never in tree files.
+struct PfdQueryTiming {
+  uint32_t eyes = 0;  // 0: not measured
+  double pfd_ns = 0.0, runs_ns = 0.0, refs_ns = 0.0, bsp_ns = 0.0;
+  double runs_mean = 0.0;          // runs per query
+  double refs_mean = 0.0;          // ranges of run_refs per query (pfdQueryRefs)
+  double object_tests_mean = 0.0;  // plane tests inside detail objects per query
+};
+
 struct PfdStats {
   uint64_t fragments = 0;         // N: fragments of the BSP
   uint64_t nodes = 0;             // PFD nodes (leaves included)
@@ -218,6 +229,7 @@ struct PfdStats {
   uint64_t object_fragments = 0;  // their fragments
   uint64_t bytes = 0;             // the tree's arrays
   double build_seconds = 0.0;
+  PfdQueryTiming query_timing;
 };
 
 struct PfdNode {
@@ -359,6 +371,13 @@ PfdQueryResult pfdQueryCoherent(const PfdTree& tree, const glm::dvec3& eye, PfdC
 
 // A uniformly random point of the region's pieces (by area), for tests and statistics.
 glm::dvec2 samplePfdRegion(const PfdTree& tree, uint64_t& rng_state);
+
+// The PFD walk against the BSP traversal it replaces (both with back faces skipped), at `eyes`
+// random eyes of the tree's region (a fixed seed): pfd_ns writes out the whole order (ids), runs_ns
+// its flat runs, refs_ns only the handful of run_refs ranges on the path (pfdQueryRefs: the walk
+// itself, whose cost does not grow with the length of the order). Zero eyes or an empty region:
+// nothing measured (eyes == 0).
+PfdQueryTiming timePfdQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes);
 
 // Recomputes stats.tests_mean / tests_max over `eyes` random eyes (seeded) and stats.bytes.
 void measurePfd(PfdTree& tree, uint32_t eyes, uint64_t seed);

@@ -340,14 +340,17 @@ PfdCellJob pfdCellJobFromBytes(std::span<const uint8_t> bytes, const std::string
   return job;
 }
 
-// Outcome: u8 built; built: the tree and f64 its build_seconds (which the tree's layout writes as
-// 0); else u64 stopped_bytes, f64 stopped_fraction.
+// Outcome: u8 built; built: the tree, f64 its build_seconds (which the tree's layout writes as 0)
+// and its query timing (u32 eyes, 7 f64); else u64 stopped_bytes, f64 stopped_fraction.
 std::vector<uint8_t> pfdCellOutcomeBytes(const PfdCellOutcome& outcome) {
   Writer w;
   w.put<uint8_t>(outcome.tree ? 1 : 0);
   if (outcome.tree) {
     writeTree(w, *outcome.tree);
     w.put(outcome.tree->stats.build_seconds);
+    const PfdQueryTiming& q = outcome.tree->stats.query_timing;
+    w.put(q.eyes);
+    for (double v : {q.pfd_ns, q.runs_ns, q.refs_ns, q.bsp_ns, q.runs_mean, q.refs_mean, q.object_tests_mean}) w.put(v);
   } else {
     w.put(outcome.stopped_bytes);
     w.put(outcome.stopped_fraction);
@@ -363,6 +366,10 @@ PfdCellOutcome pfdCellOutcomeFromBytes(std::span<const uint8_t> bytes, size_t fr
   if (built) {
     out.tree = readTree(r, fragments);
     out.tree->stats.build_seconds = r.getFinite();
+    PfdQueryTiming& q = out.tree->stats.query_timing;
+    q.eyes = r.get<uint32_t>();
+    for (double* v : {&q.pfd_ns, &q.runs_ns, &q.refs_ns, &q.bsp_ns, &q.runs_mean, &q.refs_mean, &q.object_tests_mean})
+      *v = r.getFinite();
   } else {
     out.stopped_bytes = r.get<uint64_t>();
     out.stopped_fraction = r.getFinite();

@@ -18,7 +18,7 @@ namespace walkvis {
 namespace {
 
 constexpr char kMagic[8] = {'W', 'V', 'J', 'R', 'N', 'L', '\r', '\n'};
-constexpr uint32_t kVersion = 2;
+constexpr uint32_t kVersion = 3;  // 3: outcomes carry their query timing
 constexpr size_t kHeaderBytes = 24;
 
 // A job's identity in the journal: its bytes without the cost estimate, which does not decide its

@@ -266,7 +266,10 @@ TEST(PfdJournal, KeepsWholeRecordsAndDropsATornOne) {
     jobs.push_back(job);
   }
   std::vector<PfdCellOutcome> outcomes;
-  for (const PfdCellJob& job : jobs) outcomes.push_back(buildPfdCell(context, job));
+  for (const PfdCellJob& job : jobs) {
+    outcomes.push_back(buildPfdCell(context, job));
+    outcomes.back().tree->stats.query_timing = timePfdQueries(bsp, *outcomes.back().tree, 20 + 10 * outcomes.size());
+  }
   PfdCellOutcome over;
   over.stopped_bytes = 1234;
   over.stopped_fraction = 0.25;
@@ -291,6 +294,14 @@ TEST(PfdJournal, KeepsWholeRecordsAndDropsATornOne) {
         ASSERT_TRUE(got->tree && outcomes[k].tree);
         EXPECT_TRUE(pfdTreeBytes(*got->tree) == pfdTreeBytes(*outcomes[k].tree));
         EXPECT_EQ(got->tree->stats.tests_mean, outcomes[k].tree->stats.tests_mean);
+        // The query timing travels with the outcome, not in the tree's bytes.
+        const PfdQueryTiming &a = got->tree->stats.query_timing, &b = outcomes[k].tree->stats.query_timing;
+        EXPECT_EQ(a.eyes, 20 + 10 * (k + 1));
+        EXPECT_EQ(a.eyes, b.eyes);
+        EXPECT_GT(a.bsp_ns, 0.0);
+        EXPECT_EQ(a.pfd_ns, b.pfd_ns);
+        EXPECT_EQ(a.bsp_ns, b.bsp_ns);
+        EXPECT_EQ(a.refs_mean, b.refs_mean);
       }
     }
     PfdCellJob other = jobs[0];

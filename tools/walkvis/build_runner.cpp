@@ -6,10 +6,11 @@
 //
 // Rank 0 schedules: each round's jobs, the costliest first, go to whichever slot is free, its own
 // or another rank's (dynamic assignment; an HFD cell's cost is poorly estimated before it is
-// built). Messages (MPI_BYTE): a rank's READY (u32 slots), rank 0's JOB (u32 index + job bytes)
-// and STOP, a rank's RESULT (u32 index + outcome bytes) or FAILED (the error's text). Only the
+// built). Messages (MPI_BYTE): a rank's READY (u32 slots), rank 0's JOB (u32 index, u32 timing
+// eyes, job bytes) and STOP, a rank's RESULT (u32 index + outcome bytes) or FAILED (the error's text). Only the
 // thread that called MPI_Init calls MPI (MPI_THREAD_FUNNELED); jobs run on slot threads of their
-// own. A waiting rank polls (MPI_Iprobe, then a 1 ms sleep) rather than blocking in MPI_Recv:
+// own. The slot that builds a cell also times queries of its tree (timePfdQueries), so that this
+// part of the report spreads over the ranks as the trees do. A waiting rank polls (MPI_Iprobe, then a 1 ms sleep) rather than blocking in MPI_Recv:
 // OpenMPI's blocking calls spin, and would take a core from the slots on a machine whose cores
 // are all ranks.
 #include "build_runner.h"
@@ -28,6 +29,7 @@
 #include <exception>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <thread>
 
 #include "core/byte_io.h"
@@ -76,10 +78,11 @@ bool receiveBytes(int source, int& from, int& tag, std::vector<uint8_t>& bytes) 
   return true;
 }
 
-// An index followed by bytes, as JOB and RESULT carry them.
-std::vector<uint8_t> indexed(uint32_t index, const std::vector<uint8_t>& bytes) {
+// An index followed by bytes, as RESULT carries them (JOB: with its timing eyes between).
+std::vector<uint8_t> indexed(uint32_t index, const std::vector<uint8_t>& bytes, std::optional<uint32_t> eyes = {}) {
   ByteWriter w;
   w.put(index);
+  if (eyes) w.put(*eyes);
   w.bytes.insert(w.bytes.end(), bytes.begin(), bytes.end());
   return std::move(w.bytes);
 }
@@ -94,6 +97,11 @@ class LocalSlots {
     PfdCellOutcome outcome;
     std::string error;  // what went wrong; empty: the outcome holds
   };
+  struct Job {
+    uint32_t index = 0;
+    PfdCellJob job;
+    uint32_t timing_eyes = 0;  // timePfdQueries of the tree at this many eyes (0: none)
+  };
 
   LocalSlots(const PfdCellContext& context, uint32_t count) : context_(context), count_(count) {
     for (uint32_t k = 0; k < count; ++k) threads_.emplace_back([this] { work(); });
@@ -107,10 +115,10 @@ class LocalSlots {
     for (std::thread& t : threads_) t.join();
   }
   uint32_t free() const { return count_ - busy_; }
-  void submit(uint32_t index, const PfdCellJob& job) {
+  void submit(const Job& job) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      inbox_.emplace_back(index, job);
+      inbox_.push_back(job);
       ++busy_;
     }
     wake_.notify_one();
@@ -134,7 +142,7 @@ class LocalSlots {
  private:
   void work() {
     while (true) {
-      std::pair<uint32_t, PfdCellJob> item;
+      Job item;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         wake_.wait(lock, [&] { return closed_ || !inbox_.empty(); });
@@ -143,11 +151,13 @@ class LocalSlots {
         inbox_.pop_front();
       }
       Done done;
-      done.index = item.first;
+      done.index = item.index;
       try {
-        done.outcome = buildPfdCell(context_, item.second, [this](double) {
+        done.outcome = buildPfdCell(context_, item.job, [this](double) {
           if (cancel_) throw Cancelled{};
         });
+        if (done.outcome.tree)
+          done.outcome.tree->stats.query_timing = timePfdQueries(*context_.bsp, *done.outcome.tree, item.timing_eyes);
       } catch (const Cancelled&) {
         done.error = "cancelled";
       } catch (const std::exception& e) {
@@ -165,7 +175,7 @@ class LocalSlots {
   const uint32_t count_;
   std::mutex mutex_;
   std::condition_variable wake_, finished_;
-  std::deque<std::pair<uint32_t, PfdCellJob>> inbox_;
+  std::deque<Job> inbox_;
   std::vector<Done> outbox_;
   uint32_t busy_ = 0;  // submitted and not yet collected
   bool closed_ = false;
@@ -174,6 +184,11 @@ class LocalSlots {
 };
 
 }  // namespace
+
+uint32_t queryTimingEyes(uint32_t stat_eyes, size_t cells) {
+  const size_t most = std::min<size_t>(stat_eyes, 2000);
+  return static_cast<uint32_t>(std::clamp<size_t>(100000 / std::max<size_t>(cells, 1), std::min<size_t>(64, most), most));
+}
 
 MpiWorld::MpiWorld() {
   // mpirun (OpenMPI's ORTE or PMIx) sets these; without them the process runs alone, no MPI_Init.
@@ -256,6 +271,7 @@ struct CellScheduler::State {
     const size_t needed = pending.size();
     if (needed == 0 && progress)
       progress("round " + std::to_string(round) + ": all " + std::to_string(jobs.size()) + " cells from the journal");
+    const uint32_t eyes = queryTimingEyes(context.options.tree.stat_eyes, jobs.size());
     size_t received = 0;
     const auto round_start = std::chrono::steady_clock::now();
     double last_line = -kProgressSeconds;
@@ -284,12 +300,12 @@ struct CellScheduler::State {
     std::vector<uint8_t> bytes;
     while (received < needed) {
       while (local.free() > 0 && !pending.empty()) {
-        local.submit(pending.front(), jobs[pending.front()]);
+        local.submit({pending.front(), jobs[pending.front()], eyes});
         pending.pop_front();
       }
       for (int r = 1; r < world.size(); ++r)
         for (; remote_free[r] > 0 && !pending.empty(); --remote_free[r]) {
-          sendBytes(r, kTagJob, indexed(pending.front(), pfdCellJobBytes(jobs[pending.front()])));
+          sendBytes(r, kTagJob, indexed(pending.front(), pfdCellJobBytes(jobs[pending.front()]), eyes));
           pending.pop_front();
         }
       bool got = false;
@@ -355,7 +371,8 @@ void serveCells(const PfdCellContext& context, const MpiWorld& world, uint32_t t
       if (tag != kTagJob) continue;
       ByteReader r(bytes, who);
       const uint32_t index = r.get<uint32_t>();
-      local.submit(index, pfdCellJobFromBytes(r.take(r.remaining()), who + "job"));
+      const uint32_t eyes = r.get<uint32_t>();
+      local.submit({index, pfdCellJobFromBytes(r.take(r.remaining()), who + "job"), eyes});
     }
     if (stop) {
       local.cancel();

@@ -32,6 +32,12 @@ class MpiWorld {
   int rank_ = 0, size_ = 1, local_size_ = 1;
 };
 
+// Eyes at which each of `cells` view cells has its queries timed (timePfdQueries) for the build's
+// report: about 100,000 for them all, 64 to 2,000 each, never over stat_eyes (0: none). The BSP
+// traversal it times costs tens of µs an eye at 20k fragments, and freedoom2 MAP12's several
+// hundred cells spent minutes at 2,000 each.
+uint32_t queryTimingEyes(uint32_t stat_eyes, size_t cells);
+
 // Rank 0's side of a build (the only side without MPI): a PfdCellRunner that hands the jobs of each
 // round out, the costliest first, to `threads` local slots and to every other rank's slots as each
 // asks for more (dynamic assignment: the cost estimates are poor for HFD cells), skips the jobs the

@@ -41,49 +41,6 @@ constexpr std::pair<const char*, uint64_t PfdStats::*> kVisibilityFields[] = {
     {"visibility_kept_unproven", &PfdStats::visibility_kept_unproven},
 };
 
-struct QueryTiming {
-  double pfd_ns = 0.0, runs_ns = 0.0, refs_ns = 0.0, bsp_ns = 0.0;
-  double runs_mean = 0.0;  // runs per query
-  double refs_mean = 0.0;  // ranges of run_refs per query (pfdQueryRefs)
-  double object_tests_mean = 0.0;  // plane tests inside detail objects per query
-};
-
-// Mean wall time of one query at random eyes of the tree's region: the PFD walk against the BSP
-// traversal it replaces (both with back faces skipped). pfd_ns writes out the whole order (ids),
-// runs_ns its flat runs, refs_ns only the handful of run_refs ranges on the path (pfdQueryRefs:
-// the walk itself, whose cost does not grow with the length of the order).
-QueryTiming timeQueries(const BspTree& bsp, const PfdTree& tree, uint32_t eyes) {
-  QueryTiming t;
-  if (tree.region.empty() || eyes == 0) return t;
-  std::vector<glm::dvec3> points;
-  uint64_t state = 12345;
-  for (uint32_t i = 0; i < eyes; ++i) {
-    const glm::dvec2 p = samplePfdRegion(tree, state);
-    points.emplace_back(p.x, tree.height, p.y);
-  }
-  std::vector<uint32_t> order;
-  order.reserve(bsp.fragments.size());
-  std::vector<PfdRun> runs;
-  std::vector<PfdRefRange> lists;
-  // Mean ns per eye of query(eye), and the mean of what it returns (the size of its output).
-  auto timeEach = [&](auto&& query, double& ns, double& mean) {
-    uint64_t total = 0;
-    const auto start = std::chrono::steady_clock::now();
-    for (const glm::dvec3& e : points) total += query(e);
-    ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / eyes;
-    mean = static_cast<double>(total) / eyes;
-  };
-  double ids_mean = 0.0;
-  timeEach([&](const glm::dvec3& e) { pfdQuery(tree, e, order); return order.size(); }, t.pfd_ns, ids_mean);
-  uint64_t object_tests = 0;
-  for (const glm::dvec3& e : points) object_tests += pfdQuery(tree, e, order).object_tests;
-  t.object_tests_mean = static_cast<double>(object_tests) / eyes;
-  timeEach([&](const glm::dvec3& e) { backToFront(bsp, e, order, true); return order.size(); }, t.bsp_ns, ids_mean);
-  timeEach([&](const glm::dvec3& e) { pfdQueryRuns(tree, e, runs); return runs.size(); }, t.runs_ns, t.runs_mean);
-  timeEach([&](const glm::dvec3& e) { pfdQueryRefs(tree, e, lists); return lists.size(); }, t.refs_ns, t.refs_mean);
-  return t;
-}
-
 int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing);
 
 int runBuild(const BuildArgs& args) {
@@ -199,14 +156,11 @@ int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing) {
   uint64_t total_cells = 0, over_bound = 0;
   PfdStats total;  // the visibility counters summed over the trees
   auto trees = nlohmann::ordered_json::array();
-  // Query timing costs a BSP traversal per eye (tens of µs at 20k fragments), so the eyes are
-  // spread over the cells: at most 2,000 per cell and about 100,000 for the file (freedoom2 MAP12,
-  // several hundred cells, spent minutes here with 2,000 per cell), at least 64 per cell.
+  // The slot that built a cell timed its queries (build_runner.cpp); a cell without that timing
+  // is timed here, with the eyes spread the same way over the file's cells.
   size_t cell_count = 0;
   for (const PfdLevel& level : file.levels) cell_count += level.cells.size();
-  const size_t timing_max = std::min<uint32_t>(args.stat_eyes, 2000);
-  const uint32_t timing_eyes = static_cast<uint32_t>(
-      std::clamp<size_t>(100000 / std::max<size_t>(cell_count, 1), std::min<size_t>(64, timing_max), timing_max));
+  const uint32_t timing_eyes = queryTimingEyes(args.stat_eyes, cell_count);
   size_t cells_timed = 0;
   for (const PfdLevel& level : file.levels) {
     for (size_t c = 0; c < level.cells.size(); ++c) {
@@ -254,8 +208,11 @@ int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing) {
         total.*field += s.*field;
       }
       ++total_cells;
-      const QueryTiming qt = timeQueries(file.bsp, t, std::min<uint32_t>(args.stat_eyes, timing_eyes));
-      if (++cells_timed % 50 == 0) progress("query timing: " + std::to_string(cells_timed) + " of " + std::to_string(cell_count) + " cells");
+      PfdQueryTiming qt = t.stats.query_timing;
+      if (qt.eyes == 0 && args.stat_eyes > 0) {
+        qt = timePfdQueries(file.bsp, t, timing_eyes);
+        if (++cells_timed % 50 == 0) progress("query timing: " + std::to_string(cells_timed) + " of " + std::to_string(cell_count) + " cells");
+      }
       e["query_ns"] = qt.pfd_ns;
       e["query_runs_ns"] = qt.runs_ns;
       e["runs_per_query"] = qt.runs_mean;

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
+#include "build_runner.h"
 #include "build_setup.h"
 #include "commands.h"
 #include "pfd_hfd/pfd.h"
@@ -139,7 +140,12 @@ int runPlan(const PlanArgs& args) {
                                                      cumulative.begin()) - 1, lo, hi - 1);
     const auto c0 = std::chrono::steady_clock::now();
     PfdCellOutcome outcome;
-    one_thread.execute([&] { outcome = buildPfdCell(context, jobs[s.index]); });
+    // As the build's slots do: the tree, then its query timing for the report.
+    one_thread.execute([&] {
+      outcome = buildPfdCell(context, jobs[s.index]);
+      if (outcome.tree)
+        outcome.tree->stats.query_timing = timePfdQueries(setup->file.bsp, *outcome.tree, queryTimingEyes(args.build.stat_eyes, n));
+    });
     s.seconds = secondsSince(c0);
     s.over = !outcome.tree;
     s.bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);

@@ -237,8 +237,27 @@ TEST(DistributedBuild, PlanSamplesTheCellsAndEstimatesTheBuild) {
   const double built_bytes = built["total_bytes"], planned_bytes = plan["tree_bytes"];
   EXPECT_GT(planned_bytes, 0.5 * built_bytes);
   EXPECT_LT(planned_bytes, 4.0 * built_bytes);
+  // Whole levels estimated from windows: the office's one level against its whole build (bytes
+  // +35% when written; the figures are in docs/scaleout/README.md).
+  const std::string whole = "'" + std::string(WALKVIS_BINARY) + "' build gen:office --tree hfd --stat-eyes 200 --threads 1 -o '" +
+                            (dir / "w.wvt").string() + "' --json";
+  const nlohmann::json built_whole = jsonOf(whole, dir / "whole.json", dir / "whole.log");
+  ASSERT_FALSE(built_whole.is_discarded()) << readText(dir / "whole.log");
+  ASSERT_EQ(built_whole["view_cells"], 1);
+  const nlohmann::json windows =
+      jsonOf("'" + std::string(WALKVIS_BINARY) + "' plan gen:office --tree hfd --stat-eyes 200 --hfd-cells windows --json",
+             dir / "windows.json", dir / "windows.log");
+  ASSERT_FALSE(windows.is_discarded()) << readText(dir / "windows.log");
+  EXPECT_EQ(windows["sampled_by"], "windows");
+  EXPECT_EQ(windows["cells"], 1);
+  const double whole_bytes = built_whole["total_bytes"], window_bytes = windows["tree_bytes"];
+  EXPECT_GT(window_bytes, 0.5 * whole_bytes);
+  EXPECT_LT(window_bytes, 2.0 * whole_bytes);
+  EXPECT_LT(windows["sample_seconds"].get<double>(), windows["trees_cpu_seconds"].get<double>())
+      << "four windows of a sixteenth each cost less than the level they estimate";
   // Bad input: one line, exit status 2.
-  for (const std::string& bad : {std::string("plan gen:office --ranks 0"), std::string("plan '") + (dir / "none.obj").string() + "'"}) {
+  for (const std::string& bad : {std::string("plan gen:office --ranks 0"), std::string("plan gen:office --hfd-cells windows --windows 0"),
+                                 std::string("plan '") + (dir / "none.obj").string() + "'"}) {
     EXPECT_EQ(runCommand("'" + std::string(WALKVIS_BINARY) + "' " + bad + " > /dev/null 2> '" + (dir / "bad.log").string() + "'"), 2) << bad;
     const std::string text = readText(dir / "bad.log");
     EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1) << text;

@@ -1,9 +1,11 @@
 // walkvis plan SCENE [--ranks K] [--threads T] [--sample N] [--json] [build options]: what a build
 // of SCENE would cost, from a sample of its view cells built here. The cells are planned as the
 // build plans its first round (PFD: by the lines' estimate; HFD levels start whole there, so the
-// plan cuts them by the same estimate, `--hfd-cells lines`, or takes them whole, `whole`). The
-// sampled cells are chosen from the cells sorted by estimated cost, one from the middle of each
-// of N strata of equal count, and each is built on one thread. Every cell is then given the
+// plan cuts them by the same estimate, `--hfd-cells lines`, or takes them whole, `whole`, or
+// takes them whole and estimates a sampled level from windows of it, `windows`, docs/DESIGN.md,
+// "Builds across processes and restarts"). The sampled cells are chosen from the cells sorted by
+// estimated cost, one from the middle of each of N strata of equal cost, and each is built (or
+// estimated from its windows) on one thread. Every cell is then given the
 // seconds and bytes per unit of estimated cost of its stratum's sample: the whole build's CPU
 // seconds and tree bytes, the memory a rank needs, and the wall time on K ranks of T slots,
 // scheduled as the build schedules (costliest first onto the next free slot) after the setup
@@ -14,17 +16,20 @@
 #include <cstdio>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <queue>
 #include <thread>
 
 #include <sys/resource.h>
 
+#include <glm/common.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
 #include "build_runner.h"
 #include "build_setup.h"
 #include "commands.h"
+#include "core/rng.h"
 #include "pfd_hfd/pfd.h"
 
 namespace walkvis {
@@ -36,6 +41,8 @@ struct PlanArgs {
   uint32_t threads = 1;  // slots per rank
   uint32_t sample = 12;
   std::string hfd_cells = "lines";
+  uint32_t windows = 4;        // --hfd-cells windows: windows built per sampled level
+  double window_share = 1.0 / 16.0;  // each window's side: sqrt(share x the level's walkable area)
   bool json = false;
 };
 
@@ -81,9 +88,107 @@ std::string hours(double seconds) {
   return t;
 }
 
+// Twice the signed area of ring `r` (counter-clockwise positive).
+double ringArea2(const std::vector<glm::dvec2>& r) {
+  double a = 0.0;
+  for (size_t i = 0, j = r.size() - 1; i < r.size(); j = i++) a += r[j].x * r[i].y - r[i].x * r[j].y;
+  return a;
+}
+
+// Whether p lies inside ring r (crossings of a ray towards +x; either orientation).
+bool insideRing(const std::vector<glm::dvec2>& r, const glm::dvec2& p) {
+  bool in = false;
+  for (size_t i = 0, j = r.size() - 1; i < r.size(); j = i++)
+    if ((r[i].y > p.y) != (r[j].y > p.y) && p.x < r[j].x + (p.y - r[j].y) * (r[i].x - r[j].x) / (r[i].y - r[j].y))
+      in = !in;
+  return in;
+}
+
+// A uniformly random walkable point of `level`: a ring by area, then a point of its bounds kept
+// when inside it. nullopt when the level has no area or 1,000 tries miss.
+std::optional<glm::dvec2> walkablePoint(const FloorLevel& level, Rng& rng) {
+  double total = 0.0;
+  for (const auto& r : level.walkable) total += std::abs(ringArea2(r));
+  if (!(total > 0.0)) return std::nullopt;
+  for (int tries = 0; tries < 1000; ++tries) {
+    double pick = rng.uniform() * total;
+    const std::vector<glm::dvec2>* ring = &level.walkable.back();
+    for (const auto& r : level.walkable) {
+      pick -= std::abs(ringArea2(r));
+      if (pick < 0.0) {
+        ring = &r;
+        break;
+      }
+    }
+    glm::dvec2 lo = (*ring)[0], hi = (*ring)[0];
+    for (const glm::dvec2& v : *ring) lo = glm::min(lo, v), hi = glm::max(hi, v);
+    const glm::dvec2 p{rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y)};
+    if (insideRing(*ring, p)) return p;
+  }
+  return std::nullopt;
+}
+
+struct CellEstimate {
+  double seconds = 0.0, bytes = 0.0, rays = 0.0;
+  bool over = false;  // a window's tree passed its budget
+  uint32_t windows = 0;
+};
+
+// An HFD cell's cost from windows of it, for a cell too dear to build whole as a sample: `count`
+// square windows about random walkable points, each of side sqrt(share x the cell's walkable
+// area), and one window a hundredth of that side for the cost every tree pays whatever its area
+// (classifying every line against its region, the root's tests). An HFD tree's time and bytes
+// follow the area its leaves cover (docs/hfd/README.md: its tests are mostly from small regions),
+// so the cell is estimated as that fixed cost plus the windows' cost per unit of walkable area
+// (the trees' region_area) times the cell's. What the whole cell's large top regions cost beyond
+// the windows' is not counted.
+CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& cell, uint32_t count, double share,
+                               uint32_t timing_eyes, uint64_t seed) {
+  const FloorLevel& level = context.levels[cell.level];
+  CellEstimate e;
+  const double area = level.walkable_area;
+  const double side = std::sqrt(share * area);
+  Rng rng{mixHash(seed, cell.level)};
+  auto build = [&](const glm::dvec2& c, double half, double& seconds, double& bytes, double& rays, double& covered) {
+    PfdCellJob job = cell;
+    job.box = PfdBox{c - glm::dvec2(half), c + glm::dvec2(half)};
+    const auto t0 = std::chrono::steady_clock::now();
+    const PfdCellOutcome outcome = buildPfdCell(context, job);
+    if (outcome.tree) timePfdQueries(*context.bsp, *outcome.tree, timing_eyes);  // as the build's slots do
+    seconds = secondsSince(t0);
+    e.over |= !outcome.tree;
+    bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);
+    rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
+    covered = outcome.tree ? outcome.tree->stats.region_area : 0.0;
+  };
+  const std::optional<glm::dvec2> first = walkablePoint(level, rng);
+  if (!first || !(side > 0.0)) return e;
+  double fixed_s = 0.0, fixed_b = 0.0, fixed_r = 0.0, fixed_a = 0.0;
+  build(*first, 0.005 * side, fixed_s, fixed_b, fixed_r, fixed_a);
+  double sum_s = 0.0, sum_b = 0.0, sum_r = 0.0, sum_a = 0.0;
+  for (uint32_t k = 0; k < count; ++k) {
+    const std::optional<glm::dvec2> c = k == 0 ? first : walkablePoint(level, rng);
+    if (!c) break;
+    double ws = 0.0, wb = 0.0, wr = 0.0, wa = 0.0;
+    build(*c, 0.5 * side, ws, wb, wr, wa);
+    sum_s += std::max(0.0, ws - fixed_s);
+    sum_b += wb;
+    sum_r += wr;
+    sum_a += wa;
+    ++e.windows;
+  }
+  if (!(sum_a > 0.0)) return e;
+  e.seconds = fixed_s + sum_s / sum_a * area;
+  e.bytes = sum_b / sum_a * area;
+  e.rays = sum_r / sum_a * area;
+  return e;
+}
+
 int runPlan(const PlanArgs& args) {
   if (args.ranks == 0 || args.threads == 0 || args.sample == 0)
     throw Error("--ranks, --threads and --sample: expected at least 1");
+  if (args.windows == 0 || !(args.window_share > 0.0 && args.window_share <= 1.0))
+    throw Error("--windows: expected at least 1; --window-share: expected a share in (0, 1]");
   auto progress = [](const std::string& line) {
     std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
@@ -93,6 +198,7 @@ int runPlan(const PlanArgs& args) {
   const double setup_seconds = secondsSince(t0);
   const double setup_rss = peakRssBytes();
   const bool by_lines = !setup->hfd || args.hfd_cells == "lines";
+  const bool by_windows = setup->hfd && args.hfd_cells == "windows";
   std::vector<PfdCellJob> jobs = planPfdCells(setup->file.bsp, setup->scene.levels, setup->scene.eye_height,
                                               setup->options, setup->only, by_lines,
                                               [&](size_t done, size_t levels, size_t cells) {
@@ -127,6 +233,7 @@ int runPlan(const PlanArgs& args) {
   struct Sampled {
     size_t index = 0;
     double seconds = 0.0, bytes = 0.0, rays = 0.0;
+    double sampling_seconds = 0.0;  // what sampling it took here (windows: less than `seconds`)
     bool over = false;
   };
   std::vector<Sampled> sampled(m);
@@ -139,17 +246,31 @@ int runPlan(const PlanArgs& args) {
     s.index = std::clamp<size_t>(static_cast<size_t>(std::upper_bound(cumulative.begin() + lo, cumulative.begin() + hi + 1, middle) -
                                                      cumulative.begin()) - 1, lo, hi - 1);
     const auto c0 = std::chrono::steady_clock::now();
-    PfdCellOutcome outcome;
-    // As the build's slots do: the tree, then its query timing for the report.
-    one_thread.execute([&] {
-      outcome = buildPfdCell(context, jobs[s.index]);
-      if (outcome.tree)
-        outcome.tree->stats.query_timing = timePfdQueries(setup->file.bsp, *outcome.tree, queryTimingEyes(args.build.stat_eyes, n));
-    });
-    s.seconds = secondsSince(c0);
-    s.over = !outcome.tree;
-    s.bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);
-    s.rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
+    if (by_windows && jobs[s.index].box == std::nullopt) {
+      CellEstimate est;
+      one_thread.execute([&] {
+        est = estimateByWindows(context, jobs[s.index], args.windows, args.window_share,
+                                queryTimingEyes(args.build.stat_eyes, n), setup->options.tree.seed);
+      });
+      s.seconds = est.seconds;
+      s.bytes = est.bytes;
+      s.rays = est.rays;
+      s.over = est.over || (setup->options.cell_memory != 0 && est.bytes > static_cast<double>(setup->options.cell_memory));
+      s.sampling_seconds = secondsSince(c0);
+    } else {
+      PfdCellOutcome outcome;
+      // As the build's slots do: the tree, then its query timing for the report.
+      one_thread.execute([&] {
+        outcome = buildPfdCell(context, jobs[s.index]);
+        if (outcome.tree)
+          outcome.tree->stats.query_timing = timePfdQueries(setup->file.bsp, *outcome.tree, queryTimingEyes(args.build.stat_eyes, n));
+      });
+      s.seconds = secondsSince(c0);
+      s.sampling_seconds = s.seconds;
+      s.over = !outcome.tree;
+      s.bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);
+      s.rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
+    }
     char line[160];
     std::snprintf(line, sizeof line, "plan: sample %zu/%zu (cell %zu of %zu by cost): %.2f s, %s%s", k + 1, m, s.index + 1,
                   n, s.seconds, human(s.bytes).c_str(), s.over ? " (over --cell-memory: the build would cut it)" : "");
@@ -172,7 +293,7 @@ int runPlan(const PlanArgs& args) {
   }
   const size_t over = static_cast<size_t>(std::count_if(sampled.begin(), sampled.end(), [](const Sampled& s) { return s.over; }));
   const double sampled_seconds = std::accumulate(sampled.begin(), sampled.end(), 0.0,
-                                                 [](double a, const Sampled& s) { return a + s.seconds; });
+                                                 [](double a, const Sampled& s) { return a + s.sampling_seconds; });
   const uint64_t slots = static_cast<uint64_t>(args.ranks) * args.threads;
   const double trees_wall = makespan(seconds, slots);
   const double wall = setup_seconds + trees_wall;
@@ -189,6 +310,11 @@ int runPlan(const PlanArgs& args) {
   j["levels"] = setup->only.empty() ? setup->scene.levels.size() : setup->only.size();
   j["cells"] = n;
   j["cells_planned_by"] = by_lines ? "lines" : "whole levels";
+  j["sampled_by"] = by_windows ? "windows" : "cells";
+  if (by_windows) {
+    j["windows"] = args.windows;
+    j["window_share"] = args.window_share;
+  }
   j["sampled"] = m;
   j["sampled_over_cell_memory"] = over;
   j["sample_seconds"] = sampled_seconds;
@@ -213,9 +339,10 @@ int runPlan(const PlanArgs& args) {
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
-  std::printf("%s: %zu polygons, %zu fragments, %s trees of %zu view cells (planned by %s); %zu sampled in %.1f s\n",
+  std::printf("%s: %zu polygons, %zu fragments, %s trees of %zu view cells (planned by %s); %zu sampled%s in %.1f s\n",
               setup->scene.name.c_str(), setup->scene.polygons.size(), setup->file.bsp.fragments.size(),
-              args.build.tree.c_str(), n, by_lines ? "lines" : "whole levels", m, sampled_seconds);
+              args.build.tree.c_str(), n, by_lines ? "lines" : "whole levels", m, by_windows ? " by windows" : "",
+              sampled_seconds);
   std::printf("  setup per rank (load, BSP, visibility scene)  %s\n", hours(setup_seconds).c_str());
   std::printf("  trees, CPU                                   %s\n", hours(cpu).c_str());
   std::printf("  tree bytes                                   %s\n", human(tree_bytes).c_str());
@@ -244,9 +371,15 @@ void addPlanCommand(CLI::App& app, CommandRunner& runner) {
   sub->add_option("--threads", args->threads, "Slots (threads) per rank (default 1)");
   sub->add_option("--sample", args->sample, "View cells to build as the sample (default 12)");
   sub->add_option("--hfd-cells", args->hfd_cells,
-                  "hfd: plan the cells by the lines' estimate (lines, default) or take whole levels as the build's "
-                  "first round does (whole)")
-      ->check(CLI::IsMember({"lines", "whole"}));
+                  "hfd: plan the cells by the lines' estimate (lines, default), take whole levels as the build's "
+                  "first round does (whole), or take whole levels and estimate each sampled one from windows of it "
+                  "(windows)")
+      ->check(CLI::IsMember({"lines", "whole", "windows"}));
+  sub->add_option("--windows", args->windows,
+                  "--hfd-cells windows: whole levels, each sampled one estimated from this many square windows of it "
+                  "(default 4) and a tiny one for its fixed cost, by walkable area");
+  sub->add_option("--window-share", args->window_share,
+                  "--hfd-cells windows: a window's side squared against the level's walkable area (default 1/16)");
   sub->add_flag("--json", args->json, "Print one JSON object");
   sub->callback([args, &runner] { runner = [args] { return runPlan(*args); }; });
 }

@@ -88,13 +88,6 @@ std::string hours(double seconds) {
   return t;
 }
 
-// Twice the signed area of ring `r` (counter-clockwise positive).
-double ringArea2(const std::vector<glm::dvec2>& r) {
-  double a = 0.0;
-  for (size_t i = 0, j = r.size() - 1; i < r.size(); j = i++) a += r[j].x * r[i].y - r[i].x * r[j].y;
-  return a;
-}
-
 // Whether p lies inside ring r (crossings of a ray towards +x; either orientation).
 bool insideRing(const std::vector<glm::dvec2>& r, const glm::dvec2& p) {
   bool in = false;
@@ -104,26 +97,13 @@ bool insideRing(const std::vector<glm::dvec2>& r, const glm::dvec2& p) {
   return in;
 }
 
-// A uniformly random walkable point of `level`: a ring by area, then a point of its bounds kept
-// when inside it. nullopt when the level has no area or 1,000 tries miss.
-std::optional<glm::dvec2> walkablePoint(const FloorLevel& level, Rng& rng) {
-  double total = 0.0;
-  for (const auto& r : level.walkable) total += std::abs(ringArea2(r));
-  if (!(total > 0.0)) return std::nullopt;
+// A uniformly random walkable point of `level` inside `box`: a point of the box kept when some
+// ring holds it. nullopt when 1,000 tries miss.
+std::optional<glm::dvec2> walkablePoint(const FloorLevel& level, const PfdBox& box, Rng& rng) {
   for (int tries = 0; tries < 1000; ++tries) {
-    double pick = rng.uniform() * total;
-    const std::vector<glm::dvec2>* ring = &level.walkable.back();
-    for (const auto& r : level.walkable) {
-      pick -= std::abs(ringArea2(r));
-      if (pick < 0.0) {
-        ring = &r;
-        break;
-      }
-    }
-    glm::dvec2 lo = (*ring)[0], hi = (*ring)[0];
-    for (const glm::dvec2& v : *ring) lo = glm::min(lo, v), hi = glm::max(hi, v);
-    const glm::dvec2 p{rng.uniform(lo.x, hi.x), rng.uniform(lo.y, hi.y)};
-    if (insideRing(*ring, p)) return p;
+    const glm::dvec2 p{rng.uniform(box.lo.x, box.hi.x), rng.uniform(box.lo.y, box.hi.y)};
+    for (const auto& r : level.walkable)
+      if (insideRing(r, p)) return p;
   }
   return std::nullopt;
 }
@@ -134,20 +114,48 @@ struct CellEstimate {
   uint32_t windows = 0;
 };
 
-// An HFD cell's cost from windows of it, for a cell too dear to build whole as a sample: `count`
-// square windows about random walkable points, each of side sqrt(share x the cell's walkable
-// area), and one window a hundredth of that side for the cost every tree pays whatever its area
-// (classifying every line against its region, the root's tests). An HFD tree's time and bytes
-// follow the area its leaves cover (docs/hfd/README.md: its tests are mostly from small regions),
-// so the cell is estimated as that fixed cost plus the windows' cost per unit of walkable area
-// (the trees' region_area) times the cell's. What the whole cell's large top regions cost beyond
-// the windows' is not counted.
+// An HFD cell's cost from windows of it, for a cell too dear to build whole as a sample. An HFD
+// tree's time and bytes follow the area its leaves cover (docs/hfd/README.md: its tests are mostly
+// from small regions), at a rate that varies over the level. The level is cut into kTiles x kTiles
+// tiles; a tile is drawn with probability q in proportion to its walkable area times (1 + the lines
+// crossing it, the planner's estimate of an HFD tree's cost), a square window of side
+// sqrt(share x the level's walkable area) is built about a random walkable point of it, and its
+// cost per unit of walkable area (the tree's region_area) stands for the tile's: the level is the
+// fixed cost every tree pays (a window a hundredth of that side: classifying every line, the
+// root's tests) plus the mean over the windows of rate x the tile's area / q (importance
+// sampling, unbiased for the tiles' sum where a window's rate is its tile's). What the whole
+// level's large top regions cost beyond the windows' is not counted.
 CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& cell, uint32_t count, double share,
                                uint32_t timing_eyes, uint64_t seed) {
+  constexpr int kTiles = 4;
   const FloorLevel& level = context.levels[cell.level];
   CellEstimate e;
-  const double area = level.walkable_area;
-  const double side = std::sqrt(share * area);
+  const double side = std::sqrt(share * level.walkable_area);
+  if (level.walkable.empty() || !(side > 0.0)) return e;
+  glm::dvec2 lo = level.walkable[0][0], hi = lo;
+  for (const auto& r : level.walkable)
+    for (const glm::dvec2& v : r) lo = glm::min(lo, v), hi = glm::max(hi, v);
+  const double height = level.floor_y + context.eye_height;
+  struct Tile {
+    PfdBox box;
+    double area = 0.0, weight = 0.0;
+  };
+  std::vector<Tile> tiles;
+  double total_weight = 0.0;
+  const glm::dvec2 step = (hi - lo) / static_cast<double>(kTiles);
+  for (int i = 0; i < kTiles; ++i)
+    for (int k = 0; k < kTiles; ++k) {
+      Tile t;
+      t.box.lo = lo + step * glm::dvec2(i, k);
+      t.box.hi = lo + step * glm::dvec2(i + 1, k + 1);
+      const PfdLineCount c = countPfdLines(*context.bsp, level.walkable, height, t.box);
+      t.area = c.area;
+      t.weight = c.area * (1.0 + static_cast<double>(c.crossing));
+      if (!(t.weight > 0.0)) continue;
+      total_weight += t.weight;
+      tiles.push_back(t);
+    }
+  if (tiles.empty()) return e;
   Rng rng{mixHash(seed, cell.level)};
   auto build = [&](const glm::dvec2& c, double half, double& seconds, double& bytes, double& rays, double& covered) {
     PfdCellJob job = cell;
@@ -161,26 +169,38 @@ CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& 
     rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
     covered = outcome.tree ? outcome.tree->stats.region_area : 0.0;
   };
-  const std::optional<glm::dvec2> first = walkablePoint(level, rng);
-  if (!first || !(side > 0.0)) return e;
   double fixed_s = 0.0, fixed_b = 0.0, fixed_r = 0.0, fixed_a = 0.0;
-  build(*first, 0.005 * side, fixed_s, fixed_b, fixed_r, fixed_a);
-  double sum_s = 0.0, sum_b = 0.0, sum_r = 0.0, sum_a = 0.0;
+  bool fixed_done = false;
+  double sum_s = 0.0, sum_b = 0.0, sum_r = 0.0;
   for (uint32_t k = 0; k < count; ++k) {
-    const std::optional<glm::dvec2> c = k == 0 ? first : walkablePoint(level, rng);
-    if (!c) break;
+    double pick = rng.uniform() * total_weight;
+    const Tile* tile = &tiles.back();
+    for (const Tile& t : tiles) {
+      pick -= t.weight;
+      if (pick < 0.0) {
+        tile = &t;
+        break;
+      }
+    }
+    const std::optional<glm::dvec2> c = walkablePoint(level, tile->box, rng);
+    if (!c) continue;
+    if (!fixed_done) {
+      build(*c, 0.005 * side, fixed_s, fixed_b, fixed_r, fixed_a);
+      fixed_done = true;
+    }
     double ws = 0.0, wb = 0.0, wr = 0.0, wa = 0.0;
     build(*c, 0.5 * side, ws, wb, wr, wa);
-    sum_s += std::max(0.0, ws - fixed_s);
-    sum_b += wb;
-    sum_r += wr;
-    sum_a += wa;
+    if (!(wa > 0.0)) continue;
+    const double scale = tile->area * total_weight / tile->weight / wa;  // tile's area / q, per unit of window area
+    sum_s += std::max(0.0, ws - fixed_s) * scale;
+    sum_b += wb * scale;
+    sum_r += wr * scale;
     ++e.windows;
   }
-  if (!(sum_a > 0.0)) return e;
-  e.seconds = fixed_s + sum_s / sum_a * area;
-  e.bytes = sum_b / sum_a * area;
-  e.rays = sum_r / sum_a * area;
+  if (e.windows == 0) return e;
+  e.seconds = fixed_s + sum_s / e.windows;
+  e.bytes = sum_b / e.windows;
+  e.rays = sum_r / e.windows;
   return e;
 }
 
@@ -377,7 +397,7 @@ void addPlanCommand(CLI::App& app, CommandRunner& runner) {
       ->check(CLI::IsMember({"lines", "whole", "windows"}));
   sub->add_option("--windows", args->windows,
                   "--hfd-cells windows: whole levels, each sampled one estimated from this many square windows of it "
-                  "(default 4) and a tiny one for its fixed cost, by walkable area");
+                  "(default 4, drawn by tiles weighted by area and lines) and a tiny one for its fixed cost");
   sub->add_option("--window-share", args->window_share,
                   "--hfd-cells windows: a window's side squared against the level's walkable area (default 1/16)");
   sub->add_flag("--json", args->json, "Print one JSON object");

@@ -7,12 +7,13 @@
 // Rank 0 schedules: each round's jobs, the costliest first, go to whichever slot is free, its own
 // or another rank's (dynamic assignment; an HFD cell's cost is poorly estimated before it is
 // built). Messages (MPI_BYTE): a rank's READY (u32 slots), rank 0's JOB (u32 index, u32 timing
-// eyes, job bytes) and STOP, a rank's RESULT (u32 index + outcome bytes) or FAILED (the error's text). Only the
-// thread that called MPI_Init calls MPI (MPI_THREAD_FUNNELED); jobs run on slot threads of their
-// own. The slot that builds a cell also times queries of its tree (timePfdQueries), so that this
-// part of the report spreads over the ranks as the trees do. A waiting rank polls (MPI_Iprobe, then a 1 ms sleep) rather than blocking in MPI_Recv:
-// OpenMPI's blocking calls spin, and would take a core from the slots on a machine whose cores
-// are all ranks.
+// eyes, job bytes) and STOP, a rank's RESULT (u32 index + outcome bytes) or FAILED (the error's
+// text). Only the thread that called MPI_Init calls MPI (MPI_THREAD_FUNNELED); jobs run on slot
+// threads of their own. The slot that builds a cell also times queries of its tree
+// (buildTimedPfdCell), so that this part of the report spreads over the ranks as the trees do. A
+// waiting rank polls (MPI_Iprobe, then a 1 ms sleep) rather than blocking in MPI_Recv: OpenMPI's
+// blocking calls spin, and would take a core from the slots on a machine whose cores are all
+// ranks.
 #include "build_runner.h"
 
 #include <mpi.h>
@@ -153,11 +154,9 @@ class LocalSlots {
       Done done;
       done.index = item.index;
       try {
-        done.outcome = buildPfdCell(context_, item.job, [this](double) {
+        done.outcome = buildTimedPfdCell(context_, item.job, item.timing_eyes, [this](double) {
           if (cancel_) throw Cancelled{};
         });
-        if (done.outcome.tree)
-          done.outcome.tree->stats.query_timing = timePfdQueries(*context_.bsp, *done.outcome.tree, item.timing_eyes);
       } catch (const Cancelled&) {
         done.error = "cancelled";
       } catch (const std::exception& e) {
@@ -184,6 +183,13 @@ class LocalSlots {
 };
 
 }  // namespace
+
+PfdCellOutcome buildTimedPfdCell(const PfdCellContext& context, const PfdCellJob& job, uint32_t timing_eyes,
+                                 const std::function<void(double)>& progress) {
+  PfdCellOutcome outcome = buildPfdCell(context, job, progress);
+  if (outcome.tree) outcome.tree->stats.query_timing = timePfdQueries(*context.bsp, *outcome.tree, timing_eyes);
+  return outcome;
+}
 
 uint32_t queryTimingEyes(uint32_t stat_eyes, size_t cells) {
   const size_t most = std::min<size_t>(stat_eyes, 2000);

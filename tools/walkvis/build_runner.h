@@ -38,6 +38,11 @@ class MpiWorld {
 // hundred cells spent minutes at 2,000 each.
 uint32_t queryTimingEyes(uint32_t stat_eyes, size_t cells);
 
+// buildPfdCell, then (when it made a tree) its queries timed at `timing_eyes` eyes into
+// stats.query_timing: what a build's slot does with a job, and what `walkvis plan` measures.
+PfdCellOutcome buildTimedPfdCell(const PfdCellContext& context, const PfdCellJob& job, uint32_t timing_eyes,
+                                 const std::function<void(double)>& progress = {});
+
 // Rank 0's side of a build (the only side without MPI): a PfdCellRunner that hands the jobs of each
 // round out, the costliest first, to `threads` local slots and to every other rank's slots as each
 // asks for more (dynamic assignment: the cost estimates are poor for HFD cells), skips the jobs the

@@ -156,12 +156,8 @@ int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing) {
   uint64_t total_cells = 0, over_bound = 0;
   PfdStats total;  // the visibility counters summed over the trees
   auto trees = nlohmann::ordered_json::array();
-  // The slot that built a cell timed its queries (build_runner.cpp); a cell without that timing
-  // is timed here, with the eyes spread the same way over the file's cells.
-  size_t cell_count = 0;
-  for (const PfdLevel& level : file.levels) cell_count += level.cells.size();
-  const uint32_t timing_eyes = queryTimingEyes(args.stat_eyes, cell_count);
-  size_t cells_timed = 0;
+  // Every cell's query timing was measured by the slot that built it (build_runner.cpp,
+  // buildTimedPfdCell) and came back with it, from another rank or the journal too.
   for (const PfdLevel& level : file.levels) {
     for (size_t c = 0; c < level.cells.size(); ++c) {
       const PfdTree& t = level.cells[c];
@@ -208,11 +204,7 @@ int runBuild(const BuildArgs& args, const MpiWorld& world, bool& distributing) {
         total.*field += s.*field;
       }
       ++total_cells;
-      PfdQueryTiming qt = t.stats.query_timing;
-      if (qt.eyes == 0 && args.stat_eyes > 0) {
-        qt = timePfdQueries(file.bsp, t, timing_eyes);
-        if (++cells_timed % 50 == 0) progress("query timing: " + std::to_string(cells_timed) + " of " + std::to_string(cell_count) + " cells");
-      }
+      const PfdQueryTiming& qt = t.stats.query_timing;
       e["query_ns"] = qt.pfd_ns;
       e["query_runs_ns"] = qt.runs_ns;
       e["runs_per_query"] = qt.runs_mean;

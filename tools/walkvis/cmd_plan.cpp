@@ -108,9 +108,28 @@ std::optional<glm::dvec2> walkablePoint(const FloorLevel& level, const PfdBox& b
   return std::nullopt;
 }
 
-struct CellEstimate {
+// What one job cost here on this thread: built and timed as the build's slots do
+// (buildTimedPfdCell), or, past its budget, how many bytes it had when it stopped.
+struct CellCost {
   double seconds = 0.0, bytes = 0.0, rays = 0.0;
-  bool over = false;  // a window's tree passed its budget
+  double area = 0.0;  // walkable area of its region (0 when over)
+  bool over = false;  // the tree passed the job's budget
+};
+
+CellCost measureCell(const PfdCellContext& context, const PfdCellJob& job, uint32_t timing_eyes) {
+  CellCost c;
+  const auto t0 = std::chrono::steady_clock::now();
+  const PfdCellOutcome outcome = buildTimedPfdCell(context, job, timing_eyes);
+  c.seconds = secondsSince(t0);
+  c.over = !outcome.tree;
+  c.bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);
+  c.rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
+  c.area = outcome.tree ? outcome.tree->stats.region_area : 0.0;
+  return c;
+}
+
+struct CellEstimate {
+  CellCost cost;      // seconds, bytes and rays of the whole cell as estimated
   uint32_t windows = 0;
 };
 
@@ -157,20 +176,14 @@ CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& 
     }
   if (tiles.empty()) return e;
   Rng rng{mixHash(seed, cell.level)};
-  auto build = [&](const glm::dvec2& c, double half, double& seconds, double& bytes, double& rays, double& covered) {
+  auto window = [&](const glm::dvec2& c, double half) {
     PfdCellJob job = cell;
     job.box = PfdBox{c - glm::dvec2(half), c + glm::dvec2(half)};
-    const auto t0 = std::chrono::steady_clock::now();
-    const PfdCellOutcome outcome = buildPfdCell(context, job);
-    if (outcome.tree) timePfdQueries(*context.bsp, *outcome.tree, timing_eyes);  // as the build's slots do
-    seconds = secondsSince(t0);
-    e.over |= !outcome.tree;
-    bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);
-    rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
-    covered = outcome.tree ? outcome.tree->stats.region_area : 0.0;
+    const CellCost w = measureCell(context, job, timing_eyes);
+    e.cost.over |= w.over;
+    return w;
   };
-  double fixed_s = 0.0, fixed_b = 0.0, fixed_r = 0.0, fixed_a = 0.0;
-  bool fixed_done = false;
+  std::optional<double> fixed_seconds;
   double sum_s = 0.0, sum_b = 0.0, sum_r = 0.0;
   for (uint32_t k = 0; k < count; ++k) {
     double pick = rng.uniform() * total_weight;
@@ -184,23 +197,19 @@ CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& 
     }
     const std::optional<glm::dvec2> c = walkablePoint(level, tile->box, rng);
     if (!c) continue;
-    if (!fixed_done) {
-      build(*c, 0.005 * side, fixed_s, fixed_b, fixed_r, fixed_a);
-      fixed_done = true;
-    }
-    double ws = 0.0, wb = 0.0, wr = 0.0, wa = 0.0;
-    build(*c, 0.5 * side, ws, wb, wr, wa);
-    if (!(wa > 0.0)) continue;
-    const double scale = tile->area * total_weight / tile->weight / wa;  // tile's area / q, per unit of window area
-    sum_s += std::max(0.0, ws - fixed_s) * scale;
-    sum_b += wb * scale;
-    sum_r += wr * scale;
+    if (!fixed_seconds) fixed_seconds = window(*c, 0.005 * side).seconds;
+    const CellCost w = window(*c, 0.5 * side);
+    if (!(w.area > 0.0)) continue;
+    const double scale = tile->area * total_weight / tile->weight / w.area;  // tile's area / q, per unit of window area
+    sum_s += std::max(0.0, w.seconds - *fixed_seconds) * scale;
+    sum_b += w.bytes * scale;
+    sum_r += w.rays * scale;
     ++e.windows;
   }
   if (e.windows == 0) return e;
-  e.seconds = fixed_s + sum_s / e.windows;
-  e.bytes = sum_b / e.windows;
-  e.rays = sum_r / e.windows;
+  e.cost.seconds = *fixed_seconds + sum_s / e.windows;
+  e.cost.bytes = sum_b / e.windows;
+  e.cost.rays = sum_r / e.windows;
   return e;
 }
 
@@ -266,31 +275,23 @@ int runPlan(const PlanArgs& args) {
     s.index = std::clamp<size_t>(static_cast<size_t>(std::upper_bound(cumulative.begin() + lo, cumulative.begin() + hi + 1, middle) -
                                                      cumulative.begin()) - 1, lo, hi - 1);
     const auto c0 = std::chrono::steady_clock::now();
-    if (by_windows && jobs[s.index].box == std::nullopt) {
-      CellEstimate est;
-      one_thread.execute([&] {
-        est = estimateByWindows(context, jobs[s.index], args.windows, args.window_share,
-                                queryTimingEyes(args.build.stat_eyes, n), setup->options.tree.seed);
-      });
-      s.seconds = est.seconds;
-      s.bytes = est.bytes;
-      s.rays = est.rays;
-      s.over = est.over || (setup->options.cell_memory != 0 && est.bytes > static_cast<double>(setup->options.cell_memory));
-      s.sampling_seconds = secondsSince(c0);
-    } else {
-      PfdCellOutcome outcome;
-      // As the build's slots do: the tree, then its query timing for the report.
-      one_thread.execute([&] {
-        outcome = buildPfdCell(context, jobs[s.index]);
-        if (outcome.tree)
-          outcome.tree->stats.query_timing = timePfdQueries(setup->file.bsp, *outcome.tree, queryTimingEyes(args.build.stat_eyes, n));
-      });
-      s.seconds = secondsSince(c0);
-      s.sampling_seconds = s.seconds;
-      s.over = !outcome.tree;
-      s.bytes = outcome.tree ? static_cast<double>(outcome.tree->stats.bytes) : static_cast<double>(outcome.stopped_bytes);
-      s.rays = outcome.tree ? static_cast<double>(outcome.tree->stats.visibility_rays) : 0.0;
-    }
+    const uint32_t timing_eyes = queryTimingEyes(args.build.stat_eyes, n);
+    CellCost cost;
+    one_thread.execute([&] {
+      if (by_windows && jobs[s.index].box == std::nullopt) {
+        cost = estimateByWindows(context, jobs[s.index], args.windows, args.window_share, timing_eyes,
+                                 setup->options.tree.seed)
+                   .cost;
+        cost.over |= setup->options.cell_memory != 0 && cost.bytes > static_cast<double>(setup->options.cell_memory);
+      } else {
+        cost = measureCell(context, jobs[s.index], timing_eyes);
+      }
+    });
+    s.sampling_seconds = secondsSince(c0);
+    s.seconds = cost.seconds;
+    s.bytes = cost.bytes;
+    s.rays = cost.rays;
+    s.over = cost.over;
     char line[160];
     std::snprintf(line, sizeof line, "plan: sample %zu/%zu (cell %zu of %zu by cost): %.2f s, %s%s", k + 1, m, s.index + 1,
                   n, s.seconds, human(s.bytes).c_str(), s.over ? " (over --cell-memory: the build would cut it)" : "");

@@ -3,7 +3,8 @@
 // removal", Computer Graphics Forum 17(1), 1998 [JamesDay1998]; definition and construction:
 // docs/DESIGN.md, "PFD tree"). Regions are exact (pfd_region_cgal.h): test-lines through corners
 // happen (1–16% of decisions, docs/DESIGN.md, "Sizes and errors"), and a corner that lies on a
-// line must count as touching it, not crossing it.
+// line must count as touching it, not crossing it. This file is the traversal: which line a node
+// tests is pfd_line_choice_cgal.h's, and the lists' runs and sequences are pfd_run_store.h's.
 #include <algorithm>
 #include <bit>
 #include <cfloat>
@@ -19,22 +20,13 @@
 #include "core/hash.h"
 #include "pfd_hfd/pfd.h"
 #include "pfd_hfd/pfd_internal.h"
+#include "pfd_hfd/pfd_line_choice_cgal.h"
 #include "pfd_hfd/pfd_region_cgal.h"
 #include "pfd_hfd/pfd_run_store.h"
-#include "pfd_hfd/pfd_search.h"
 
 namespace walkvis {
 using namespace pfd_exact;
 namespace {
-
-// CellSearch keeps a class's sides in one LineBits.
-static_assert(kPfdMaxSearchLines == kSearchMaxLines);
-// A search's classes (leaves of the model; O(lines²) in one convex piece) and memo are bounded
-// whatever its lines: a search given up costs the greedy choice, never the build. The memo (one per
-// tree being built, freed with it) is outside PfdOptions::max_memory, which bounds what the tree
-// keeps.
-constexpr size_t kMaxSearchClasses = 4096;
-constexpr size_t kSearchMemoBytes = size_t{64} << 20;
 
 // tests_optimal needs the tree's exact mean tests and the search's prediction to agree this closely
 // (relative): both sum the same leaves' areas in doubles by different clips (~1e-15 each), while a
@@ -74,67 +66,22 @@ class Builder {
   Builder(const BspTree& bsp, double height, const PfdOptions& options, const Region& root,
           const std::vector<uint8_t>& objects, const std::vector<std::pair<glm::dvec3, glm::dvec3>>& object_boxes,
           PfdTree& out)
-      : bsp_(bsp), options_(options), out_(out), height_(height), object_(objects), object_box_(object_boxes) {
+      : bsp_(bsp),
+        options_(options),
+        out_(out),
+        height_(height),
+        lines_(bsp, height, options.drop_back_faces, root, objects),
+        sliver_tol_(kSliverTolerance * regionExtent(root)),
+        choice_(options, lines_, sliver_tol_),
+        object_(objects),
+        object_box_(object_boxes) {
     const size_t nn = bsp.nodes.size();
     if (bsp.fragments.size() >= kObjectMark) throw PfdBudgetError("pfd: more than 2^31 fragments");
     object_of_.assign(nn, UINT32_MAX);
-    lines_.reserve(nn);
-    for (const BspNode& node : bsp.nodes) lines_.push_back(planeLine(node.plane, height));
-    frag_line_.assign(bsp.fragments.size(), UINT32_MAX);
-    for (size_t f = 0; f < bsp.fragments.size(); ++f) {
-      // Only the facing of a degenerate fragment needs its own line; keeping back faces, no line.
-      if (bsp.fragment_orientation[f] == 0 && options.drop_back_faces) {
-        frag_line_[f] = static_cast<uint32_t>(lines_.size());
-        lines_.push_back(planeLine(bsp.fragments[f].plane, height));
-      }
-    }
-    // Identical planes (either orientation) give the same line: one canonical id.
-    std::unordered_map<uint64_t, std::vector<uint32_t>> by_hash;
-    for (uint32_t id = 0; id < lines_.size(); ++id) {
-      Plane q = lines_[id].plane;
-      if (q.n.x < 0 || (q.n.x == 0 && q.n.z < 0)) {
-        q.n = -q.n;
-        q.d = -q.d;
-      }
-      const uint64_t hsh = fnv1aDoubles({q.n.x, q.n.y, q.n.z, q.d});
-      auto& bucket = by_hash[hsh];
-      uint32_t canon = id;
-      for (uint32_t other : bucket) {
-        Plane o = lines_[other].plane;
-        if (o.n.x < 0 || (o.n.x == 0 && o.n.z < 0)) {
-          o.n = -o.n;
-          o.d = -o.d;
-        }
-        if (o.n == q.n && o.d == q.d) {
-          canon = lines_[other].canon;
-          break;
-        }
-      }
-      if (canon == id) bucket.push_back(id);
-      lines_[id].canon = canon;
-    }
-    sliver_tol_ = kSliverTolerance * regionExtent(root);
-    side_.assign(lines_.size(), kUnknown);
-    cross_stamp_.assign(lines_.size(), 0);
     unresolved_stamp_.assign(nn, 0);
     test_plane_.assign(lines_.size(), UINT32_MAX);
     hidden_.assign(bsp.fragments.size(), 0);
     witness_.assign(bsp.fragments.size(), std::nullopt);
-    // Every line is classified against the whole region once: a line that does not cross it has
-    // the same side in every sub-region, for good (never logged, never undone). Only the others
-    // ("varying") are ever classified again, so the work per node follows them, not N.
-    // The lines inside detail objects are never tested (nor varying): the query orders an object.
-    varying_.assign(lines_.size(), 0);
-    for (uint32_t id = 0; id < lines_.size(); ++id) {
-      if (id < nn && object_[id] != 0) continue;
-      const int s = classifyRegion(lines_[id], root, counters);
-      if (s == kCross) {
-        varying_[id] = 1;
-        ++varying_count;
-      } else {
-        side_[id] = static_cast<int8_t>(s);
-      }
-    }
     // Per BSP subtree, in preorder: its varying lines and its fragments (contiguous ranges).
     vary_range_.assign(nn, {0, 0});
     frag_range_.assign(nn, {0, 0});
@@ -151,10 +98,11 @@ class Builder {
         const BspNode& node = bsp.nodes[id];
         vary_range_[id].first = static_cast<uint32_t>(vary_list_.size());
         frag_range_[id].first = static_cast<uint32_t>(frag_pre_.size());
-        if (varying_[id]) vary_list_.push_back(static_cast<uint32_t>(id));
+        if (lines_.varying(id)) vary_list_.push_back(static_cast<uint32_t>(id));
         for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) {
           frag_pre_.push_back(f);
-          if (frag_line_[f] != UINT32_MAX && varying_[frag_line_[f]]) vary_list_.push_back(frag_line_[f]);
+          const uint32_t fl = lines_.fragmentLine(f);
+          if (fl != UINT32_MAX && lines_.varying(fl)) vary_list_.push_back(fl);
         }
         dfs.push_back({id, true});
         if (node.back >= 0) dfs.push_back({node.back, false});
@@ -169,49 +117,25 @@ class Builder {
     build(std::move(region), std::move(stack), 1);
   }
 
-  Counters counters;
+  Counters& counters() { return lines_.counters; }
+  const RootSearch& rootSearch() const { return choice_.rootSearch(); }
   VisibilityCounters vis_counters;
   uint64_t hidden_rejected = 0;
   uint64_t visibility_witnessed = 0;
   uint64_t objects_box_rejected = 0;
-  uint64_t varying_count = 0;
   std::vector<double> leaf_areas;
   double leaf_bound_tests = 0.0;  // Σ over leaves of area × tested lines bounding the leaf
+  double leaf_depth_area = 0.0;   // Σ over leaves of area × tests on the leaf's path
   uint64_t depth_max = 0;
   uint64_t list_fragments = 0;
 
  private:
-  static constexpr int8_t kUnknown = 5;
   double done_area_ = 0.0;  // leaves built, for options_.progress (against out_.stats.region_area)
 
   bool hfd() const { return options_.visibility != nullptr; }
 
-  const Plane& linePlane(uint32_t id) const {
-    if (id < bsp_.nodes.size()) return bsp_.nodes[id].plane;
-    // A fragment plane: find the fragment (rare: degenerate fragments only).
-    for (size_t f = 0; f < frag_line_.size(); ++f)
-      if (frag_line_[f] == id) return bsp_.fragments[f].plane;
-    return bsp_.nodes[0].plane;  // unreachable
-  }
-
-  int side(uint32_t id, const Region& r) {
-    if (side_[id] != kUnknown) return side_[id];
-    if (cross_stamp_[id] == region_id_) return kCross;
-    const int s = classifyRegion(lines_[id], r, counters);
-    if (s == kCross) {
-      cross_stamp_[id] = region_id_;
-    } else {
-      side_[id] = static_cast<int8_t>(s);
-      log_.push_back(id);
-    }
-    return s;
-  }
-
   void undo(size_t mark, size_t hidden_mark, size_t witness_mark) {
-    while (log_.size() > mark) {
-      side_[log_.back()] = kUnknown;
-      log_.pop_back();
-    }
+    lines_.undo(mark);
     while (hidden_log_.size() > hidden_mark) {
       hidden_[hidden_log_.back()] = 0;
       hidden_log_.pop_back();
@@ -246,8 +170,10 @@ class Builder {
 
   // The crossing line (if any) among the orientation-0 fragments of a node; UINT32_MAX if none.
   uint32_t crossingFragmentLine(const BspNode& node, const Region& r) {
-    for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f)
-      if (frag_line_[f] != UINT32_MAX && side(frag_line_[f], r) == kCross) return frag_line_[f];
+    for (uint32_t f = node.first_fragment; f < node.first_fragment + node.fragment_count; ++f) {
+      const uint32_t fl = lines_.fragmentLine(f);
+      if (fl != UINT32_MAX && lines_.side(fl, r) == kCross) return fl;
+    }
     return UINT32_MAX;
   }
 
@@ -260,7 +186,7 @@ class Builder {
         continue;
       }
       const int8_t o = bsp_.fragment_orientation[f];
-      const int fs = o != 0 ? s * o : side(frag_line_[f], r);
+      const int fs = o != 0 ? s * o : lines_.side(lines_.fragmentLine(f), r);
       if (fs > 0) out.push_back(f);
     }
   }
@@ -273,11 +199,11 @@ class Builder {
 
   // Whether no line inside the subtree crosses r (every varying line of it is decided).
   bool resolved(int32_t id, const Region& r) {
-    if (unresolved_stamp_[id] == region_id_) return false;
+    if (unresolved_stamp_[id] == lines_.regionStamp()) return false;
     const auto [b, e] = vary_range_[id];
     for (uint32_t k = b; k < e; ++k)
-      if (side(vary_list_[k], r) == kCross) {
-        unresolved_stamp_[id] = region_id_;
+      if (lines_.side(vary_list_[k], r) == kCross) {
+        unresolved_stamp_[id] = lines_.regionStamp();
         return false;
       }
     return true;
@@ -300,7 +226,7 @@ class Builder {
         out.push_back(kObjectMark | static_cast<uint32_t>(item.node));  // a detail object, whole
         continue;
       }
-      const int s = side(static_cast<uint32_t>(item.node), r);
+      const int s = lines_.side(static_cast<uint32_t>(item.node), r);
       int32_t far_child, near_child;
       children(node, s, far_child, near_child);
       if (near_child >= 0) walk_.push_back({near_child, 0});
@@ -315,7 +241,7 @@ class Builder {
     const auto [b, e] = vary_range_[id];
     key_.assign((e - b + 31) / 32, 0);
     for (uint32_t k = b; k < e; ++k) {
-      const uint64_t v = static_cast<uint64_t>(side_[vary_list_[k]] + 1) & 3;  // decided: -1, 0, +1
+      const uint64_t v = static_cast<uint64_t>(lines_.decidedSide(vary_list_[k]) + 1) & 3;
       key_[(k - b) / 32] |= v << (2 * ((k - b) % 32));
     }
     uint64_t h = kFnvOffset ^ static_cast<uint64_t>(id);
@@ -438,7 +364,7 @@ class Builder {
           emitSubtree(f.node, r, scratch_);
           result = scratch_.empty() ? kEmptyRun : findOrAddRef(scratch_);
         } else {
-          f.s = side(static_cast<uint32_t>(f.node), r);
+          f.s = lines_.side(static_cast<uint32_t>(f.node), r);
           children(node, f.s, f.far_child, f.near_child);
           f.stage = 1;
           if (!want(f.far_child, f.far_ref)) continue;
@@ -535,8 +461,8 @@ class Builder {
   }
 
   const std::vector<std::vector<glm::dvec2>>& rings(const Region& r) {
-    if (rings_stamp_ != region_id_) {
-      rings_stamp_ = region_id_;
+    if (rings_stamp_ != lines_.regionStamp()) {
+      rings_stamp_ = lines_.regionStamp();
       rings_.clear();
       for (const Piece& p : r) {
         std::vector<glm::dvec2> ring;
@@ -608,7 +534,7 @@ class Builder {
       if (options_.drop_back_faces) {
         const int8_t o = bsp_.fragment_orientation[f];
         const uint32_t node_line = static_cast<uint32_t>(&nodeOf(f) - bsp_.nodes.data());
-        const int s = o != 0 ? side(node_line, r) : side(frag_line_[f], r);
+        const int s = o != 0 ? lines_.side(node_line, r) : lines_.side(lines_.fragmentLine(f), r);
         if (s != kCross && (o != 0 ? s * o : s) <= 0) continue;  // back-facing everywhere in r
       }
       to_test_.push_back(f);
@@ -792,12 +718,8 @@ class Builder {
 
   // Undecided lines ahead in the traversal (the first crossing line first), for the heuristic.
   // HFD: only from the subtree that stopped the traversal (the others may turn out hidden).
-  struct Candidates {
-    std::vector<uint32_t> lines;
-    bool complete = false;  // every line still to be tested in the region is among them
-  };
-  Candidates candidates(uint32_t first, const std::vector<Item>& stack, const Region& r) {
-    Candidates out;
+  LineCandidates candidates(uint32_t first, const std::vector<Item>& stack, const Region& r) {
+    LineCandidates out;
     std::vector<uint32_t>& result = out.lines;
     result.push_back(first);
     if (options_.heuristic == PfdHeuristic::kTraversal || options_.candidates <= 1) return out;
@@ -811,8 +733,10 @@ class Builder {
       if (stack[k].emit_side != 0) {
         // A node's own fragments' lines (orientation 0) are not gathered here.
         const BspNode& own = bsp_.nodes[stack[k].node];
-        for (uint32_t f = own.first_fragment; f < own.first_fragment + own.fragment_count; ++f)
-          if (frag_line_[f] != UINT32_MAX && frag_line_[f] != first && side(frag_line_[f], r) == kCross) out.complete = false;
+        for (uint32_t f = own.first_fragment; f < own.first_fragment + own.fragment_count; ++f) {
+          const uint32_t fl = lines_.fragmentLine(f);
+          if (fl != UINT32_MAX && fl != first && lines_.side(fl, r) == kCross) out.complete = false;
+        }
         continue;
       }
       queue.assign(1, stack[k].node);
@@ -821,7 +745,7 @@ class Builder {
         if (id < 0) continue;
         ++examined;
         if (vary_range_[id].first == vary_range_[id].second) continue;  // no line in it crosses
-        const int s = side(static_cast<uint32_t>(id), r);
+        const int s = lines_.side(static_cast<uint32_t>(id), r);
         if (s == kCross) {
           if (static_cast<uint32_t>(id) != first) result.push_back(static_cast<uint32_t>(id));
           // Lines beyond it are reached by the traversal only after it is decided, but each is
@@ -836,205 +760,14 @@ class Builder {
     return out;
   }
 
-  // ---- Exhaustive choice (PfdOptions::search_lines, root_search_lines) ----
-  // An optimal order of the lines still to be tested in a region, by CellSearch (pfd_search.h), in
-  // double precision: it only decides WHICH crossing line to test next; every classification the
-  // tree relies on stays exact. A line counts as crossing a double region where it leaves a vertex
-  // strictly on each side, except where one side is a sliver the build trims instead of testing
-  // (SearchLine::reach), so that the model costs the tree the build makes; where the two still
-  // differ (a touching line that rounding shows as crossing, a sliver's area) the tree's exact mean
-  // tests differs from the prediction and tests_optimal stays false.
-  SearchLine searchLineOf(uint32_t id) const {
-    const Line& l = lines_[id];
-    return {l.a, l.b, l.c, options_.trim_slivers ? sliverReach(l, sliver_tol_) : 0.0};
-  }
-
-  CellSearch search_;
-
-  // A completed search knows the best test order for the whole subtree below the node it was made
-  // at (its memo holds the best line of every region it reached): the nodes below follow it instead
-  // of searching again, as long as the exact build stays inside its double model.
-  struct Plan {
-    bool active = false;
-    int32_t owner = -1;           // the node it was made at
-    size_t path_start = 0;        // path_lines_.size() at that node
-    std::vector<uint32_t> lines;  // the search's lines, by position
-  };
-  Plan plan_;
-  std::vector<std::pair<uint32_t, int8_t>> plan_path_;
-
- public:
-  // The root's search (the first node that tests a line): whether it completed and its plan was
-  // followed to every leaf, and what it predicted (Σ area × tests, over the model's area).
-  bool root_planned = false;
-  bool root_plan_left = false;  // the exact build left the model somewhere below the root
-  double root_cost = 0.0, root_area = 0.0;
-  double leaf_depth_area = 0.0;  // Σ over leaves of area × tests on the leaf's path
-  uint32_t root_search_lines = 0;
-  uint64_t root_search_work_done = 0;
-
- private:
-  void leavePlan() {
-    if (plan_.owner == 0) root_plan_left = true;
-    plan_.active = false;
-  }
-
-  // The planned line for the current node (it crosses r exactly), or UINT32_MAX where the plan does
-  // not know the region: a line it did not see was tested, the model has no line crossing there, or
-  // its line does not cross r exactly. The plan then ends.
-  uint32_t planLine(const Region& r) {
-    plan_path_.clear();
-    for (size_t k = plan_.path_start; k < path_lines_.size(); ++k) {
-      uint32_t pos = 0;
-      while (pos < plan_.lines.size() && lines_[plan_.lines[pos]].canon != path_lines_[k]) ++pos;
-      if (pos == plan_.lines.size()) {
-        leavePlan();
-        return UINT32_MAX;
-      }
-      plan_path_.push_back({pos, path_sides_[k]});
-    }
-    const std::optional<uint32_t> pos = search_.bestLine(plan_path_);
-    if (pos && side(plan_.lines[*pos], r) == kCross) return plan_.lines[*pos];
-    leavePlan();
-    return UINT32_MAX;
-  }
-
-  // The line to test first among `cands` (all the lines still to be tested in r) by exhaustive
-  // search, or UINT32_MAX when the search does not apply or its budget is spent. A completed search
-  // becomes the plan of the subtree below `node`. At the root (node 0) the search has its own
-  // limits (PfdOptions::root_search_lines, root_search_work) and does not spend the tree's.
-  uint32_t searchLine(const std::vector<uint32_t>& cands, const Region& r, int32_t node) {
-    const bool root = node == 0;
-    if (options_.search_lines == 0 || cands.empty() || (!root && search_work_ >= options_.search_work))
-      return UINT32_MAX;
-    const uint32_t max_lines =
-        std::min(root ? std::max(options_.search_lines, options_.root_search_lines) : options_.search_lines,
-                 kSearchMaxLines);
-    // One line per canonical plane: two BSP nodes on one plane are one test.
-    std::vector<uint32_t> lines;
-    for (uint32_t id : cands) {
-      bool dup = false;
-      for (uint32_t o : lines) dup |= lines_[o].canon == lines_[id].canon;
-      if (!dup) lines.push_back(id);
-      if (lines.size() > max_lines) return UINT32_MAX;
-    }
-    DRegion dr;
-    for (const auto& ring : rings(r)) {
-      dr.pts.insert(dr.pts.end(), ring.begin(), ring.end());
-      dr.start.push_back(static_cast<uint32_t>(dr.pts.size()));
-    }
-    std::vector<SearchLine> model(lines.size());
-    for (size_t i = 0; i < lines.size(); ++i) model[i] = searchLineOf(lines[i]);
-    const uint64_t limit =
-        root ? std::max(options_.root_search_work, options_.search_work) : options_.search_work - search_work_;
-    std::optional<double> cost;
-    if (search_.init(dr, model, kMaxSearchClasses)) cost = search_.solve(limit, kSearchMemoBytes);
-    if (root) {
-      root_search_lines = static_cast<uint32_t>(lines.size());
-      root_search_work_done = search_.work();
-    } else {
-      search_work_ += search_.work();
-    }
-    if (!cost) {  // given up: the budget is spent, the greedy choice from here on
-      if (!root && search_.work() > limit) search_work_ = options_.search_work;
-      return UINT32_MAX;
-    }
-    const std::optional<uint32_t> first = search_.bestLine({});
-    if (!first) return UINT32_MAX;
-    plan_.active = true;
-    plan_.owner = node;
-    plan_.path_start = path_lines_.size();
-    plan_.lines = std::move(lines);
-    if (root) {
-      root_planned = true;
-      root_cost = *cost;
-      root_area = search_.area();
-    }
-    return plan_.lines[*first];
-  }
-
-  // Which pieces of r lie on the positive side of l, one bit each, where l cuts none of them (at
-  // most 64 pieces); nullopt where it cuts one.
-  std::optional<uint64_t> pieceSides(const Line& l, const Region& r) {
-    if (r.size() > 64) return std::nullopt;
-    uint64_t bits = 0;
-    for (size_t k = 0; k < r.size(); ++k) {
-      bool pos = false, neg = false;
-      for (const Corner& c : r[k].corners) {
-        const int sg = cornerSign(l, c, counters);
-        pos |= sg > 0;
-        neg |= sg < 0;
-      }
-      if (pos && neg) return std::nullopt;
-      if (pos) bits |= uint64_t{1} << k;
-    }
-    return bits;
-  }
-
-  // At the root the lines still to be tested are among the varying lines (those crossing the
-  // tree's whole region) that still cross r other than in a sliver (trimSliver trims those
-  // instead): where they are few, all of them, one per plane. A line that cuts no piece of r only
-  // separates its pieces, and every line that separates them the same way is decided with it: one
-  // of those stands for all (freedoom2 MAP27 level 23: 919 lines cross its two pieces, 19 nodes).
-  // The traversal's walk (candidates()) stops at a bound on the nodes it examines and the lines it
-  // keeps, which such lines fill, and kept these trees from their root search.
-  Candidates rootCandidates(uint32_t first, const Region& r) {
-    Candidates out;
-    if (hfd() || !options_.deep_candidates || options_.heuristic != PfdHeuristic::kBalanced ||
-        options_.search_lines == 0)
-      return out;
-    std::vector<uint64_t> separations;
-    // Whether `id` (a line crossing r exactly) is kept: not a plane already kept, not a separation
-    // of the pieces already kept.
-    auto keep = [&](uint32_t id) {
-      for (uint32_t o : out.lines)
-        if (lines_[o].canon == lines_[id].canon) return false;
-      const std::optional<uint64_t> sides = pieceSides(lines_[id], r);
-      if (sides) {
-        if (std::find(separations.begin(), separations.end(), *sides) != separations.end()) return false;
-        separations.push_back(*sides);
-      }
-      return true;
-    };
-    if (keep(first)) out.lines.push_back(first);
-    for (uint32_t id = 0; id < lines_.size(); ++id) {
-      if (!varying_[id] || id == first) continue;
-      if (options_.trim_slivers && sliverSide(r, lines_[id], sliver_tol_, true) != 0) continue;  // if it crosses
-      if (side(id, r) != kCross || !keep(id)) continue;
-      out.lines.push_back(id);
-      if (out.lines.size() > kMaxRootCandidates) return Candidates{};
-    }
-    out.complete = true;
-    return out;
-  }
-  static constexpr size_t kMaxRootCandidates = kSearchMaxLines;  // a search's most lines
-
+  // The line node `node` tests (`first`: the crossing line that stopped the traversal): a plan's,
+  // or chosen among the root's candidates or, where those do not cover every line still to be
+  // tested, the traversal's own.
   uint32_t chooseLine(uint32_t first, const std::vector<Item>& stack, const Region& r, int32_t node) {
-    if (plan_.active) {
-      const uint32_t planned = planLine(r);
-      if (planned != UINT32_MAX) return planned;
-    }
-    Candidates found = node == 0 ? rootCandidates(first, r) : Candidates{};
+    if (const std::optional<uint32_t> planned = choice_.plannedLine(r, path_lines_, path_sides_)) return *planned;
+    LineCandidates found = node == 0 ? choice_.rootCandidates(first, r) : LineCandidates{};
     if (!found.complete) found = candidates(first, stack, r);
-    const std::vector<uint32_t>& cands = found.lines;
-    if (found.complete) {  // never under HFD: its candidates stop at the frontier
-      const uint32_t searched = searchLine(cands, r, node);
-      if (searched != UINT32_MAX) return searched;
-    }
-    if (cands.size() == 1) return first;
-    double total = 0.0;
-    for (const Piece& p : r) total += pieceArea(p);
-    uint32_t best = first;
-    double best_score = -1.0;
-    for (uint32_t id : cands) {
-      const double a = positiveArea(r, lines_[id]);
-      const double score = std::min(a, total - a);
-      if (score > best_score) {
-        best_score = score;
-        best = id;
-      }
-    }
-    return best;
+    return choice_.choose(first, found, r, rings(r), node, path_lines_.size());
   }
 
   // A line that crosses r only in a sliver (see trimSlivers: narrower than sliver_tol_, the
@@ -1044,15 +777,15 @@ class Builder {
   // this is done at every node, not only on W. Returns whether r changed.
   bool trimSliver(Region& r, uint32_t id) {
     if (!options_.trim_slivers) return false;
-    const Line& l = lines_[id];
+    const Line& l = lines_.line(id);
     const int sliver = sliverSide(r, l, sliver_tol_, true);  // called for crossing lines only
     if (sliver == 0) return false;
     Region front, back;
-    clipRegion(r, l, counters, &front, &back);
+    clipRegion(r, l, lines_.counters, &front, &back);
     Region& keep = sliver > 0 ? back : front;
     if (keep.empty()) return false;
     r = std::move(keep);
-    region_id_ = ++region_counter_;  // cached crossings and rings were of the untrimmed region
+    lines_.enterRegion();  // cached crossings and rings were of the untrimmed region
     return true;
   }
 
@@ -1073,14 +806,12 @@ class Builder {
 
   std::vector<uint32_t> path_lines_;  // canonical ids of the lines tested on the way to this node
   std::vector<int8_t> path_sides_;    // and the side taken after each (+1 front, -1 back)
-  uint64_t search_work_ = 0;      // CellSearch::work spent by this tree's per-node searches
-  double sliver_tol_ = 0.0;       // kSliverTolerance × the root region's extent
   static constexpr uint32_t kMaxTrimsPerNode = 64;  // a guard: each trim removes a line's crossing
 
   uint32_t testPlaneIndex(uint32_t line) {
     if (test_plane_[line] == UINT32_MAX) {
       test_plane_[line] = static_cast<uint32_t>(out_.planes.size());
-      out_.planes.push_back(linePlane(line));
+      out_.planes.push_back(lines_.plane(line));
     }
     return test_plane_[line];
   }
@@ -1090,7 +821,7 @@ class Builder {
     const int32_t index = static_cast<int32_t>(out_.nodes.size());
     out_.nodes.push_back({});
     dropNeedles(r);
-    region_id_ = ++region_counter_;
+    lines_.enterRegion();
     depth_max = std::max(depth_max, depth);
     const uint32_t first_ref = static_cast<uint32_t>(out_.run_refs.size());
     uint32_t crossing = UINT32_MAX;
@@ -1104,7 +835,7 @@ class Builder {
         continue;
       }
       if (item.emit_side == 0) {
-        const int s = side(static_cast<uint32_t>(item.node), r);
+        const int s = lines_.side(static_cast<uint32_t>(item.node), r);
         if (s == kCross) {
           // HFD: a subtree hidden from the whole region needs no test-line.
           const auto [fb, fe] = frag_range_[item.node];
@@ -1186,24 +917,22 @@ class Builder {
     }
     const uint32_t line = chooseLine(crossing, stack, r, index);
     Region front, back;
-    clipRegion(r, lines_[line], counters, &front, &back);
+    clipRegion(r, lines_.line(line), lines_.counters, &front, &back);
     r.clear();
     r.shrink_to_fit();
-    const size_t mark = log_.size(), hidden_mark = hidden_log_.size(), witness_mark = witness_log_.size();
-    side_[line] = 1;
-    log_.push_back(line);
-    path_lines_.push_back(lines_[line].canon);
+    const size_t mark = lines_.mark(), hidden_mark = hidden_log_.size(), witness_mark = witness_log_.size();
+    lines_.decide(line, 1);
+    path_lines_.push_back(lines_.canon(line));
     path_sides_.push_back(1);
     const int32_t f = build(std::move(front), stack, depth + 1);
     undo(mark, hidden_mark, witness_mark);
-    side_[line] = -1;
-    log_.push_back(line);
+    lines_.decide(line, -1);
     path_sides_.back() = -1;
     const int32_t b = build(std::move(back), std::move(stack), depth + 1);
     undo(mark, hidden_mark, witness_mark);
     path_lines_.pop_back();
     path_sides_.pop_back();
-    if (plan_.active && plan_.owner == index) plan_.active = false;
+    choice_.leaveNode(index);
     out_.nodes[index].plane = testPlaneIndex(line);
     out_.nodes[index].front = f;
     out_.nodes[index].back = b;
@@ -1220,14 +949,11 @@ class Builder {
   const PfdOptions& options_;
   PfdTree& out_;
   double height_ = 0.0;
-  std::vector<Line> lines_;         // BSP node planes [0, nodes), then degenerate fragment planes
-  std::vector<uint32_t> frag_line_;  // per fragment: its own line when its orientation is 0
-  std::vector<int8_t> side_;         // decided side for the current region (and its ancestors)
-  std::vector<uint32_t> log_;        // lines decided, in order, to undo on the way back up
-  std::vector<uint32_t> cross_stamp_;       // == region_id_: crosses the current region
-  std::vector<uint32_t> unresolved_stamp_;  // == region_id_: subtree not resolved in the current region
+  PfdLines lines_;
+  double sliver_tol_ = 0.0;  // kSliverTolerance × the root region's extent
+  PfdLineChoice choice_;
+  std::vector<uint32_t> unresolved_stamp_;  // == lines_.regionStamp(): subtree not resolved in the current region
   std::vector<uint32_t> test_plane_;
-  std::vector<uint8_t> varying_;     // the line crosses the tree's whole region
   std::vector<uint32_t> vary_list_, frag_pre_;
   std::vector<std::pair<uint32_t, uint32_t>> vary_range_, frag_range_;
   std::vector<uint8_t> hidden_;      // HFD: hidden from an ancestor region on the current path
@@ -1265,7 +991,6 @@ class Builder {
   std::vector<uint32_t> plain_, ref_items_;
   std::vector<std::vector<glm::dvec2>> rings_;
   uint32_t rings_stamp_ = 0;
-  uint32_t region_id_ = 0, region_counter_ = 0;
 };
 
 }  // namespace
@@ -1352,9 +1077,9 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.objects = tree.objects.size();
   s.object_nodes = tree.object_nodes.size();
   for (const PfdObject& o : tree.objects) s.object_fragments += o.fragments;
-  s.exact_fallbacks = counters.exact_fallbacks + builder.counters.exact_fallbacks;
-  s.touching = builder.counters.touching;
-  s.decisions = builder.counters.decisions;
+  s.exact_fallbacks = counters.exact_fallbacks + builder.counters().exact_fallbacks;
+  s.touching = builder.counters().touching;
+  s.decisions = builder.counters().decisions;
   s.visibility_tests = builder.vis_counters.tests;
   s.visibility_rays = builder.vis_counters.rays;
   s.hidden_rejected = builder.hidden_rejected;
@@ -1378,13 +1103,14 @@ PfdTree buildPfd(const BspTree& bsp, std::span<const std::vector<glm::dvec2>> wa
   s.tests_huffman_bound = huffmanMeanDepth(builder.leaf_areas);
   s.tests_cell_bound = s.region_area > 0.0 ? builder.leaf_bound_tests / s.region_area : 0.0;
   s.tests_area_mean = s.region_area > 0.0 ? builder.leaf_depth_area / s.region_area : 0.0;
-  s.root_search_lines = builder.root_search_lines;
-  s.root_search_work_done = builder.root_search_work_done;
-  if (builder.root_planned && builder.root_area > 0.0) {
-    s.tests_search_mean = builder.root_cost / builder.root_area;
+  const RootSearch& root_search = builder.rootSearch();
+  s.root_search_lines = root_search.lines;
+  s.root_search_work_done = root_search.work_done;
+  if (root_search.planned && root_search.area > 0.0) {
+    s.tests_search_mean = root_search.cost / root_search.area;
     // The plan reached every leaf, and the exact tree costs what the double model said: then no
     // tree over these lines does better (the search's minimum), up to the model's rounding.
-    s.tests_optimal = !builder.root_plan_left &&
+    s.tests_optimal = !root_search.plan_left &&
                       std::abs(s.tests_area_mean - s.tests_search_mean) <= kOptimalAgreement * std::max(1.0, s.tests_area_mean);
   }
   // A tree that meets a lower bound of every tree (no test at all, or Huffman's, or the cells') is

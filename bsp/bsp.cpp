@@ -15,6 +15,7 @@
 
 #include "bsp/bsp_internal.h"
 #include "bsp/exact_sign.h"
+#include "core/check.h"
 #include "core/hash.h"
 
 namespace walkvis {
@@ -182,6 +183,58 @@ DetailGroups detailGroups(const Scene& scene, double detail_extent) {
   return out;
 }
 
+namespace detail {
+
+std::string bspStructureProblem(const BspTree& tree) {
+  const size_t nf = tree.fragments.size(), nn = tree.nodes.size();
+  if (tree.fragment_polygon.size() != nf || tree.fragment_orientation.size() != nf)
+    return "fragment arrays of different lengths";
+  for (size_t i = 0; i < nf; ++i) {
+    const Polygon& f = tree.fragments[i];
+    if (f.vertex_count < 3 || static_cast<uint64_t>(f.first_vertex) + f.vertex_count > tree.vertices.size())
+      return "fragment " + std::to_string(i) + " has vertices out of range";
+    if (tree.fragment_orientation[i] < -1 || tree.fragment_orientation[i] > 1)
+      return "fragment " + std::to_string(i) + " has a bad orientation";
+  }
+  if (nn == 0 ? tree.root != -1 : tree.root != 0) return "bad root";
+  std::vector<uint8_t> covered(nf, 0);
+  uint64_t listed = 0;
+  for (size_t i = 0; i < nn; ++i) {
+    const BspNode& n = tree.nodes[i];
+    const std::string node = "node " + std::to_string(i);
+    const auto idx = static_cast<int32_t>(i);
+    if (i == 0 ? n.parent != -1 : (n.parent < 0 || n.parent >= idx)) return node + ": bad parent";
+    if (i > 0) {
+      const BspNode& p = tree.nodes[static_cast<size_t>(n.parent)];
+      if (p.front != idx && p.back != idx) return node + ": parent does not link to it";
+      if (n.depth != p.depth + 1) return node + ": bad depth";
+    } else if (n.depth != 1) {
+      return node + ": bad depth";
+    }
+    for (int32_t c : {n.front, n.back})
+      if (c != -1 && (c <= idx || static_cast<uint64_t>(c) >= nn || tree.nodes[static_cast<size_t>(c)].parent != idx))
+        return node + ": bad child";
+    if (n.front != -1 && n.front == n.back) return node + ": bad child";
+    // Only a separator (a plane between detail groups, bsp.h) holds no fragment.
+    if ((n.fragment_count == 0) != (n.polygon == kSeparatorPolygon) ||
+        static_cast<uint64_t>(n.first_fragment) + n.fragment_count > nf)
+      return node + ": fragments out of range";
+    for (uint32_t f = n.first_fragment; f < n.first_fragment + n.fragment_count; ++f) {
+      if (covered[f]) return node + ": fragment listed twice";
+      covered[f] = 1;
+      const Plane& q = tree.fragments[f].plane;
+      const int8_t o = q.n == n.plane.n && q.d == n.plane.d ? 1 : q.n == -n.plane.n && q.d == -n.plane.d ? -1 : 0;
+      if (tree.fragment_orientation[f] != o) return "fragment " + std::to_string(f) + " has a bad orientation";
+    }
+    listed += n.fragment_count;
+  }
+  if (listed != nf) return "fragments not covered by nodes";
+  if (tree.stats.nodes != nn || tree.stats.fragments != nf) return "statistics do not match the arrays";
+  return {};
+}
+
+}  // namespace detail
+
 BspTree buildBsp(const Scene& scene, const BspOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   validate(scene);
@@ -190,6 +243,7 @@ BspTree buildBsp(const Scene& scene, const BspOptions& options) {
   tree.stats.exact_fallbacks = detail::buildBspExact(scene, options, detail, tree);
   tree.scene_hash = sceneHash(scene);
   computeStats(tree, scene.polygons.size());
+  WALKVIS_DCHECK(detail::bspStructureProblem(tree).empty());
   tree.stats.detail_objects = detail.objects;
   tree.stats.detail_groups = detail.groups;
   tree.stats.detail_polygons = detail.polygons;

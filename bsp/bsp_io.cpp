@@ -18,6 +18,7 @@
 #include <string>
 
 #include "bsp/bsp.h"
+#include "bsp/bsp_internal.h"
 #include "core/byte_io.h"
 #include "core/hash.h"
 
@@ -158,13 +159,8 @@ BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& con
     tree.fragment_polygon[i] = r.get<uint32_t>();
     f.plane = r.getPlane();
     tree.fragment_orientation[i] = r.get<int8_t>();
-    if (f.vertex_count < 3 || static_cast<uint64_t>(f.first_vertex) + f.vertex_count > nv)
-      r.fail("fragment " + std::to_string(i) + " has vertices out of range");
-    if (tree.fragment_orientation[i] < -1 || tree.fragment_orientation[i] > 1)
-      r.fail("fragment " + std::to_string(i) + " has a bad orientation");
   }
   tree.nodes.resize(nn);
-  uint64_t next_fragment = 0;
   for (size_t i = 0; i < nn; ++i) {
     BspNode& n = tree.nodes[i];
     n.plane = r.getPlane();
@@ -176,39 +172,7 @@ BspTree loadBspFromMemory(std::span<const uint8_t> bytes, const std::string& con
     n.fragment_count = r.get<uint32_t>();
     n.depth = r.get<uint32_t>();
   }
-  // Structure: root 0 (or none), every other node's parent comes before it and links back to it,
-  // children come after their parent; node fragment ranges are disjoint, non-empty but at
-  // separators, and cover every fragment (checked in node order after sorting by first fragment is unnecessary: the
-  // writer numbers them in build order, so they are checked as a tiling in any order below).
-  if (nn == 0 ? tree.root != -1 : tree.root != 0) r.fail("bad root");
-  std::vector<uint8_t> covered(nf, 0);
-  for (size_t i = 0; i < nn; ++i) {
-    const BspNode& n = tree.nodes[i];
-    const auto idx = static_cast<int32_t>(i);
-    if (i == 0 ? n.parent != -1 : (n.parent < 0 || n.parent >= idx)) r.fail("node " + std::to_string(i) + ": bad parent");
-    if (i > 0) {
-      const BspNode& p = tree.nodes[static_cast<size_t>(n.parent)];
-      if (p.front != idx && p.back != idx) r.fail("node " + std::to_string(i) + ": parent does not link to it");
-      if (n.depth != p.depth + 1) r.fail("node " + std::to_string(i) + ": bad depth");
-    } else if (n.depth != 1) {
-      r.fail("node 0: bad depth");
-    }
-    for (int32_t c : {n.front, n.back})
-      if (c != -1 && (c <= idx || static_cast<uint64_t>(c) >= nn || tree.nodes[static_cast<size_t>(c)].parent != idx))
-        r.fail("node " + std::to_string(i) + ": bad child");
-    if (n.front != -1 && n.front == n.back) r.fail("node " + std::to_string(i) + ": bad child");
-    // Only a separator (a plane between detail groups, bsp.h) holds no fragment.
-    if ((n.fragment_count == 0) != (n.polygon == kSeparatorPolygon) ||
-        static_cast<uint64_t>(n.first_fragment) + n.fragment_count > nf)
-      r.fail("node " + std::to_string(i) + ": fragments out of range");
-    for (uint32_t f = n.first_fragment; f < n.first_fragment + n.fragment_count; ++f) {
-      if (covered[f]) r.fail("node " + std::to_string(i) + ": fragment listed twice");
-      covered[f] = 1;
-    }
-    next_fragment += n.fragment_count;
-  }
-  if (next_fragment != nf) r.fail("fragments not covered by nodes");
-  if (s.nodes != nn || s.fragments != nf) r.fail("statistics do not match the arrays");
+  if (const std::string problem = detail::bspStructureProblem(tree); !problem.empty()) r.fail(problem);
   return tree;
 }
 

@@ -38,10 +38,10 @@ struct BspOptions {
   uint32_t candidates = 24;  // kLeastCrossed: candidate planes tried per node (>= 1)
   uint64_t seed = 1;        // both heuristics: the choice is deterministic for a seed
   // kLeastCrossed: each candidate is scored on up to `samples` polygons of the node's set (all of
-  // them when fewer) as split_weight · crossed − coplanar_weight · coplanar + |front − back|.
+  // them when fewer) as split_weight · crossed + |front − back|. (A bonus per coplanar polygon was
+  // retired: docs/bsp/README.md.)
   uint32_t samples = 256;
   double split_weight = 20.0;
-  double coplanar_weight = 0.0;
   // kLeastCrossed: a node set of at most this many fragments is scored exactly (every distinct
   // plane of the set a candidate, all fragments counted) with one level of lookahead: the best
   // next split on each side is added to a candidate's crossings (bsp_build_cgal.cpp). 0 = never.
@@ -51,15 +51,14 @@ struct BspOptions {
   // `candidates` × `samples`. 0 = always sample.
   uint64_t full_count_max = 64'000'000;
   // kLeastCrossed, exact scoring (lookahead or full count): a plane that crosses none of the set's
-  // fragments is taken before any plane that crosses some (the most balanced such plane). Off by
-  // default: on Freedoom it buys < 0.01 of N/n for trees twice as deep (bsp_build_cgal.cpp).
+  // fragments is taken before any plane that crosses some (the most balanced such plane); it also
+  // turns the pilot method off. Off by default: it makes trees up to three times as deep, and what
+  // that does to the PFD and HFD builds is measured in docs/bsp/README.md.
   bool free_first = false;
   // kLeastCrossed, exact scoring: the crossing count of a horizontal candidate plane (normal ±y,
   // a floor or ceiling) is multiplied by this. Below 1 it favours horizontal planes, which cut
   // only walls spanning their height and keep floors of other heights away from walls that would
-  // cut them. Without exact_heuristic_sides 0.5 was best (freedoom2 MAP10 greedy: 1.630 at 1.0,
-  // 1.606 at 0.5, 1.656 at 2); with it (the default) 1.0 is: MAP10 with the pilot 1.440 at 1.0,
-  // 1.462 at 0.5, 1.553 at 0.25, and 1.0 is as good or better on 34 of the 35 bench scenes.
+  // cut them. With exact_heuristic_sides 1.0 is best on almost every scene (docs/bsp/README.md).
   double horizontal_weight = 1.0;
   // kLeastCrossed, exact scoring: a crossed HORIZONTAL fragment (a floor or ceiling cut by a
   // vertical plane) counts this much instead of 1 in a candidate's crossings (lookahead included).
@@ -73,9 +72,8 @@ struct BspOptions {
   // Cost: up to pilot_candidates greedy builds of the node's set per pilot node, so the total is
   // bounded by pilot_work_max (fragments summed over the node sets of all rollouts): a node is
   // piloted only while its estimated cost (pilot_candidates · m · (log2 m + 1)) fits in what is
-  // left; other nodes (in build order, front subtrees first) use plain greedy. The defaults:
-  // freedoom2 MAP10 1.611 -> 1.574 without exact_heuristic_sides, 1.517 -> 1.462 with it (both
-  // at horizontal_weight 0.5; bsp_build_cgal.cpp), the 100k office stays < 5 CPU s.
+  // left; other nodes (in build order, front subtrees first) use plain greedy. What the defaults
+  // buy and cost: docs/bsp/README.md.
   uint32_t pilot_candidates = 8;
   uint32_t pilot_min_set = 64;
   uint32_t pilot_depth_max = 12;
@@ -86,16 +84,15 @@ struct BspOptions {
   // rounded doubles, so a point on a sloped wall's line (a floor corner, a collinear wall's end)
   // lies a hair off that wall's plane and the exact build splits a sliver off its polygon; the
   // heuristic now sees such splits and avoids them. false = the old count (all such vertices on).
-  // freedoom2 MAP10 at horizontal_weight 0.5: 1.574 -> 1.462 (plain greedy 1.611 -> 1.517); mean
-  // N/n over the 35 `bench bsp` scenes 1.233 -> 1.170, the offices unchanged (bsp_build_cgal.cpp).
+  // It matters only with drop_slivers off (docs/bsp/README.md).
   bool exact_heuristic_sides = true;
   // A straddler whose vertices on one side all lie within 2^-30 of the scene's extent of the plane
   // is not split: that side's piece, thinner than the float coordinates a frame is drawn with can
   // resolve (2^-24 of the extent), is dropped and counted (BspStats::slivers_dropped), and the rest
   // goes whole to the other side. Double plane coefficients are rounded, so a vertex shared by two
   // faces of a curved or sloped mesh lies a hair off its neighbour's plane, and an exact split
-  // would cut a sliver off almost every neighbour of a chosen face: on the FZK-Haus house half of
-  // all fragments were such slivers (docs/DESIGN.md, "Slivers"). The order of every fragment kept
+  // would cut a sliver off almost every neighbour of a chosen face (docs/DESIGN.md, "Slivers";
+  // figures in docs/bsp/README.md). The order of every fragment kept
   // is still decided exactly. With it the heuristic counts such vertices as on the plane (whatever
   // exact_heuristic_sides says), as the build will.
   bool drop_slivers = true;
@@ -115,9 +112,9 @@ struct BspOptions {
   //    autopartitioned as usual and the sets where separation failed are counted
   //    (BspStats::detail_inseparable).
   // Every order stays exact: a separating plane orders what lies on its two sides like any node.
-  // 0 = every polygon is structure, the default: with slivers dropped (drop_slivers) the FZK-Haus
-  // house (17,220 polygons) makes N/n 1.732 without detail and 1.775 at 2, 1.951 at 1 (its
-  // curved furniture is split by its own planes either way; docs/DESIGN.md, "Detail").
+  // 0 = every polygon is structure, the default: on the FZK-Haus house detail made the tree
+  // larger, its curved furniture being split by its own planes either way (docs/DESIGN.md,
+  // "Detail"; docs/bsp/README.md).
   double detail_extent = 0.0;
 };
 

@@ -16,40 +16,29 @@
 // floating-point expansion path of exact_sign.h (cheap), and only the rest force CGAL's exact
 // (GMP rational) evaluation of the lazy point. The counter stats.exact_fallbacks reports how many
 // classifications the double filter could not decide. The cost over a plain double build is the
-// lazy points' memory (~100-200 bytes for a projected or constructed vertex, ~60 for a plain one)
-// and roughly 2x in time; exact evaluations themselves stay rare (see `walkvis bench bsp`).
+// lazy points' memory and time; exact evaluations themselves stay rare (`walkvis bench bsp`).
 // The splitting-plane HEURISTIC uses doubles: it only picks a plane, so it needs no exactness,
 // but it must see the splits the exact build will make. Plane coefficients are rounded, so a point
 // on a sloped wall's line (a floor corner there, the end of a collinear wall, which is a separate
 // polygon with its own rounded plane) lies a hair off that wall's plane and the exact build splits
-// a sliver off its polygon. Counting such vertices as "on" (a tolerance) hid those splits: on
-// freedoom2 MAP10 3,035 of the greedy's 4,190 splits cut a sliver thinner than 1e-9 of the extent,
-// and a greedy rollout counted 7,826 fragments for a tree of 11,052. So within the tolerance a
-// vertex counts by the exact side of its double position (exact_heuristic_sides; exact for the
-// input's double vertices, a close guess for constructed ones): greedy 1.611 -> 1.517, with the
-// pilot 1.574 -> 1.462, and the slivers the greedy cuts drop to 1,419. It also moves the best
-// horizontal_weight from 0.5 to 1.0 (MAP10 1.440; mean over the 35 bench scenes 1.233 -> 1.160).
+// a sliver off its polygon. Counting such vertices as "on" (a tolerance) hid those splits, so
+// within the tolerance a vertex counts by the exact side of its double position
+// (exact_heuristic_sides; exact for the input's double vertices, a close guess for constructed
+// ones), unless the build drops such slivers (drop_slivers): then it counts as on, as the build
+// will not split there.
 //
 // Splitting-plane choice (least-crossed), by node size m: m <= lookahead_max, every distinct
 // plane with one level of lookahead; else, when m × (distinct planes) <= full_count_max, every
 // distinct plane counted on the whole set (a bounding-box filter settles most plane/fragment
 // pairs); else `candidates` planes scored on `samples` fragments. In both exact modes a "free"
 // plane (crossing none of the set, cf. the free cuts of Paterson and Yao 1990) may be taken first
-// (free_first), and horizontal planes' crossings weigh horizontal_weight. Measured on
-// freedoom2.wad MAP10 (n 6,862, `walkvis bench bsp`): sampling only 1.724, + lookahead 1.700,
-// + full count 1.626, + free first 1.630 (but MAP26 1.466 -> 1.429, MAP14 1.444 -> 1.432),
-// + horizontal_weight 0.5 1.606. Free first is off by default: it doubles the mean depth (MAP10
-// 14.1 -> 34.3, MAP26 11.3 -> 31.1) for N/n 1.611 -> 1.606. Split weights 5..1000, lookahead up
-// to 1,024 and seeds change N/n by < 0.03.
+// (free_first), and horizontal planes' crossings weigh horizontal_weight.
 //
 // Pilot method (choosePilot, Duin and Voss 1999 [DuinVoss1999]): at nodes of >= pilot_min_set
 // fragments and depth <= pilot_depth_max the pilot_candidates best planes by the greedy score are
 // each completed by a greedy rollout (double approximation, count only) and the fewest total wins.
-// MAP10: 1.611 -> 1.602 (4 candidates, sets >= 512, depth <= 8), 1.574 (8, >= 64, <= 12 or <= 40),
-// 1.583 (16, >= 128, <= 40); CPU 0.65 s -> 3.0 s at (8, 64, 12). horizontal_fragment_weight (a
-// crossed floor or ceiling weighs w): w 0.5 1.662, 1.5 1.603, 2 1.613, 4 1.677; with the pilot, 1.5
-// gives 1.568. Neither reaches the 1.5 target on MAP10. (All figures in this paragraph and the one
-// before are without exact_heuristic_sides; with it, see above.)
+//
+// What each knob buys, measured: docs/bsp/README.md (docs/bsp/knobs.sh makes the sweep again).
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
 #include <CGAL/intersections.h>
@@ -226,8 +215,7 @@ class Builder {
     pushChildren(task.node, front, back, stack);
   }
   // Whether the budget pilot_work_max still covers a pilot at a node of m fragments, estimated
-  // as pilot_candidates rollouts of m fragments over ~log2(m) + 1 levels each (on freedoom2
-  // MAP10 the whole pilot measured 4.1 M for this estimate's unit).
+  // as pilot_candidates rollouts of m fragments over ~log2(m) + 1 levels each.
   bool pilotAffordable(size_t m) const {
     const double estimate = static_cast<double>(options_.pilot_candidates) * static_cast<double>(m) *
                             (std::log2(static_cast<double>(m)) + 1.0);
@@ -265,11 +253,9 @@ class Builder {
     int64_t crossed = 0, front = 0, back = 0, on = 0;
   };
   SideCounts countSides(std::span<const uint32_t> frags, const Plane& pl) const;
-  // The sampled greedy score of pl over `counts`: split_weight · crossed − coplanar_weight · on +
-  // |front − back|.
+  // The sampled greedy score of pl over `counts`: split_weight · crossed + |front − back|.
   double greedyScore(const SideCounts& c) const {
-    return options_.split_weight * static_cast<double>(c.crossed) - options_.coplanar_weight * static_cast<double>(c.on) +
-           static_cast<double>(std::abs(c.front - c.back));
+    return options_.split_weight * static_cast<double>(c.crossed) + static_cast<double>(std::abs(c.front - c.back));
   }
   bool detail_only_ = false;  // of the last set separate() looked at
   uint64_t cuts_ = 0;
@@ -427,13 +413,12 @@ int Builder::heuristicSide(const Plane& pl, const Frag& f) const {
   return pos && neg ? 2 : pos ? 1 : neg ? -1 : 0;
 }
 
-// Least crossed with one level of lookahead, for small sets, where most splits happen (on
-// freedoom2 MAP10, 64% of the splits of the plain least-crossed tree were made at nodes of <= 64
-// fragments). Plain least-crossed is greedy: around a pillar standing on a floor it takes a
+// Least crossed with one level of lookahead, for small sets, where most splits happen
+// (docs/bsp/README.md). Plain least-crossed is greedy: around a pillar standing on a floor it takes a
 // pillar wall (it crosses one floor piece) and later pays again for every other wall, where the
 // floor plane (crossing nothing, all floor pieces coplanar) would have separated them for free.
 // Here every distinct plane of the set is a candidate and is scored, on the whole set, by
-//   split_weight · (crossed(c) + min_p crossed_F(p) + min_p crossed_B(p)) + |F − B| − coplanar_weight · on(c)
+//   split_weight · (crossed(c) + min_p crossed_F(p) + min_p crossed_B(p)) + |F − B|
 // where F and B are the fragments c sends front and back (crossed ones in both) and
 // min_p crossed_F(p) is the fewest of F that any plane of a fragment of F crosses: the best next
 // split on each side. A crossed fragment's pieces are counted as the whole fragment (an estimate:
@@ -526,12 +511,10 @@ void Builder::chooseWithLookahead(const std::vector<uint32_t>& frags, size_t k, 
     }
     const double splits = crossings(crossed, nullptr);
     const int64_t nf = count(front_set.data()), nb = count(back_set.data());
-    const int64_t on = count(mask(c, 3));
     // A lower bound on the score without the lookahead: skip the lookahead when it cannot win.
     const double base = options_.split_weight * crossWeight(scene_.polygons[frags_[reps_[c]].poly].plane) *
                             static_cast<double>(splits) +
-                        static_cast<double>(std::abs(nf - nb)) -
-                        options_.coplanar_weight * static_cast<double>(on);
+                        static_cast<double>(std::abs(nf - nb));
     if (base >= rankThreshold(top, k)) continue;
     const double next = (nf > 0 ? bestNext(front_set) : 0.0) + (nb > 0 ? bestNext(back_set) : 0.0);
     offerRanked(top, k, base + options_.split_weight * static_cast<double>(next), reps_[c]);

@@ -62,10 +62,9 @@ struct BspBenchArgs {
   std::vector<std::string> scenes;
   int runs = 3;
   uint32_t candidates = BspOptions{}.candidates;
-  uint64_t seed = 1;
+  uint64_t seed = BspOptions{}.seed;
   uint32_t samples = BspOptions{}.samples;
   double split_weight = BspOptions{}.split_weight;
-  double coplanar_weight = BspOptions{}.coplanar_weight;
   uint32_t lookahead_max = BspOptions{}.lookahead_max;
   uint64_t full_count_max = BspOptions{}.full_count_max;
   bool free_first = BspOptions{}.free_first;
@@ -87,7 +86,6 @@ int runBspBench(const BspBenchArgs& args) {
   out["seed"] = args.seed;
   out["samples"] = args.samples;
   out["split_weight"] = args.split_weight;
-  out["coplanar_weight"] = args.coplanar_weight;
   out["lookahead_max"] = args.lookahead_max;
   out["full_count_max"] = args.full_count_max;
   out["free_first"] = args.free_first;
@@ -115,9 +113,16 @@ int runBspBench(const BspBenchArgs& args) {
     auto results = nlohmann::ordered_json::array();
     double ratio_of[2] = {0.0, 0.0};
     for (int h = 0; h < 2; ++h) {
-      BspOptions options{heuristics[h], args.candidates, args.seed, args.samples, args.split_weight,
-                         args.coplanar_weight, args.lookahead_max, args.full_count_max, args.free_first,
-                         args.horizontal_weight};
+      BspOptions options;
+      options.heuristic = heuristics[h];
+      options.candidates = args.candidates;
+      options.seed = args.seed;
+      options.samples = args.samples;
+      options.split_weight = args.split_weight;
+      options.lookahead_max = args.lookahead_max;
+      options.full_count_max = args.full_count_max;
+      options.free_first = args.free_first;
+      options.horizontal_weight = args.horizontal_weight;
       options.detail_extent = args.detail_extent;
       std::vector<double> times, cpu_times;
       std::vector<double> order_times;
@@ -249,7 +254,6 @@ void addBspBench(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--samples", args->samples, "Polygons each least-crossed candidate is scored on")
       ->check(CLI::Range(1, 1000000));
   sub->add_option("--split-weight", args->split_weight, "Least-crossed score per crossed polygon");
-  sub->add_option("--coplanar-weight", args->coplanar_weight, "Least-crossed score bonus per coplanar polygon");
   sub->add_option("--lookahead-max", args->lookahead_max,
                   "Least-crossed: node sets up to this size are scored exactly with one level of lookahead (0 = off)")
       ->check(CLI::Range(0, 100000));

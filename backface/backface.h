@@ -84,9 +84,9 @@ struct BackfaceOptions {
   enum class MaskCone : uint8_t { kAuto, kGroups, kView };
   MaskCone mask_cone = MaskCone::kAuto;
   // mask in priority lists with kGroups (list_cull.h): a chunk of fewer positions than this is
-  // tested by the exact plane test instead of a table. One table costs 0.85-1.1 us to build
-  // (N = 16), about the plane test on 1,000 listed polygons, and PFD runs average under 2
-  // fragments; 1 = tables only.
+  // tested by the exact plane test instead of a table: one table costs about as much to build as the
+  // plane test on a long run of listed polygons, and PFD runs are far shorter (docs/backface/README.md,
+  // "Lists (list_cull)"); 1 = tables only.
   uint32_t mask_list_min_chunk = 512;
   // cluster: T/R, the time of one cluster test over the time to render one vertex (paper §3);
   // 0 = chosen from the polygon count (clusterTrFor below).
@@ -99,13 +99,13 @@ struct BackfaceOptions {
   // from around it. For eyes inside a building set it (list_cull.h does, to the box of all
   // vertices): with the box around b, parallel walls at any offsets score as well as one wall (b
   // moves to the outermost plane), so Algorithm 1 merges each wall orientation into one cluster,
-  // which an eye inside the building never culls (gen:office: 6 clusters, 0 culled per frame).
+  // which an eye inside the building never culls (docs/backface/README.md, "Clustered backface test").
   // A flat box (an eye height plane) is allowed: the probability is then over its area.
   glm::dvec3 cluster_eye_lo{INFINITY};
   glm::dvec3 cluster_eye_hi{-INFINITY};
   // cluster: arrange the cluster tests in a hierarchy with front-face tests at inner nodes (§2.3).
-  // false (default): every leaf test, eight clusters per SIMD block, no branch (clustered.cpp);
-  // measured 7-14x cheaper per frame than the tree's traversal on gen:sphere, gen:dome, the bunny.
+  // false (default): every leaf test, eight clusters per SIMD block, no branch (clustered.cpp):
+  // cheaper per frame than the tree's branchy traversal (docs/backface/README.md, "Hierarchy").
   bool cluster_hierarchy = false;
   // cluster: the flat pass's vector path (kAuto: AVX2 where the CPU has it, else SSE2); the others
   // exist so that tests can check that the paths agree.
@@ -157,11 +157,9 @@ void expandToPolygons(const BackfaceCuller& culler, std::span<const uint8_t> uni
 
 // cluster's T/R: `requested` when > 0; for 0, from the polygon count: min(1, max(0.25, √(4000/n))),
 // the paper's peak T/R = 1 up to 4,000 polygons. Why: at a fixed T/R the clusters get larger as a
-// mesh gets finer (gen:sphere at T/R = 1: 96 clusters of 2,000 triangles, 448 of 69,620), so the
-// per-frame pass shrinks to a vanishing share while effectiveness falls behind the meshlet cones'
-// (70k sphere: 88.7% vs 89.9%); T/R ∝ 1/√n keeps the cluster count growing with the mesh (70k:
-// T/R 0.25, 1,933 clusters, 95.3% at 0.011 ns per polygon against the cones' 0.040, measured
-// `walkvis bench backface --tr 0.25`). Negative or non-finite: Error.
+// mesh gets finer, so the per-frame pass shrinks to a vanishing share while effectiveness falls
+// behind the meshlet cones'; T/R ∝ 1/√n keeps the cluster count growing with the mesh, and with it
+// the effectiveness (docs/backface/README.md, "Clustered backface test"). Negative or non-finite: Error.
 double clusterTrFor(size_t polygons, double requested);
 
 // Per-method builders (one file each).

@@ -20,9 +20,9 @@
 // rendering cost C/R): seed = the remaining polygon with the highest culling probability; add the
 // remaining polygons in order of decreasing n·n_seed while the merge pays off by the cost model;
 // recur on the rest (ours: near-parallel candidates nearest plane first, so coplanar pieces of
-// one wall merge before a parallel wall ends the growth: Freedoom MAP01's 2,470 BSP fragments form
-// 153 clusters, not 1,040). T/R: options.cluster_tr, by default clusterTrFor(polygon count). The
-// merge condition: the paper's derivation
+// one wall merge before a parallel wall ends the growth, and a level cut into BSP fragments forms far
+// fewer clusters: docs/backface/README.md, "Clustered backface test"). T/R: options.cluster_tr, by
+// default clusterTrFor(polygon count). The merge condition: the paper's derivation
 //   T + (1 − P_C)·C_C < 2T + (1 − P_A)·C_A + (1 − P_B)·C_B
 // gives P_C > (P_A·C_A + P_B·C_B − T) / (C_A + C_B); the printed (9)/(10) carry +T, a sign slip
 // (with +T a merge could never pass, since merging never raises the culling probability above the
@@ -33,11 +33,11 @@
 // eight clusters per block of structure-of-arrays floats, a block per AVX2 operation where the CPU
 // has AVX2 (checked at build) and four clusters per SSE operation otherwise, with
 // Comp_e'(N, M)·e' = Σ_c max(N^c·e'^c, M^c·e'^c) (no branch), the flags written 8 bytes at a time;
-// measured 0.5 ns per cluster against ~7 ns per node of the branchy §2.3 traversal, so the
-// hierarchy's saved tests no longer pay (cluster_hierarchy keeps it, evaluated as before). The
-// flat pass evaluates in single precision with its own margin (kFloatMargin), relative to an
-// origin at the centre of the model's box (b is stored relative to it), as a camera-relative
-// renderer would, so that a model far from the world origin keeps its float resolution.
+// a cluster costs a small fraction of a node of the branchy §2.3 traversal (docs/backface/README.md,
+// "Hierarchy"), so the hierarchy's saved tests no longer pay (cluster_hierarchy keeps it, evaluated
+// as before). The flat pass evaluates in single precision with its own margin (kFloatMargin),
+// relative to an origin at the centre of the model's box (b is stored relative to it), as a
+// camera-relative renderer would, so that a model far from the world origin keeps its float resolution.
 // Conservative arithmetic: the stored floats are rounded outward (N down, M up, d down, front-test
 // offset up), which only weakens the test; (8) is then evaluated in double with the margin
 // kRelMargin·(|e|₁ + scale) below zero.

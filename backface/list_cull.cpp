@@ -23,15 +23,15 @@
 //     sphere, conservative for every polygon. A chunk of fewer than mask_list_min_chunk positions
 //     gets the plane test instead (so on PFD lists, whose runs are far shorter than the default
 //     512, it IS the plane test; the bench prints the share of positions a table culls): a table
-//     costs ~1 us, and a table per run (20-30 ns per listed polygon measured on Freedoom MAP01,
-//     mask-tables) can never pay there. An eye inside a group's bounding sphere culls nothing in
-//     it (gen:office in z-buffer mode, one group of the whole building: 0 culled);
+//     costs far more to build than the plane test on a run, and a table per run can never pay
+//     there (docs/backface/README.md, "Lists (list_cull)"). An eye inside a group's bounding sphere
+//     culls nothing in it (so one group of a whole building culls nothing for eyes inside it);
 //   cluster/hierarchy: the method's own culler built over the range's polygons (its clusters are
 //     formed per range) and the unit of each position, so that the unit flags map back in order.
 //     cluster's culling probability is taken over the box of all input vertices (the eyes of a
 //     walkthrough are inside it) unless the options name an eye box: with the paper's box around
-//     each cluster's origin, gen:office's walls merged into 6 clusters, one per orientation, and
-//     an eye inside culled none of them (0 per frame in z-buffer mode; backface.h).
+//     each cluster's origin, a building's walls merge into one cluster per orientation, and an eye
+//     inside culls none of them (backface.h; docs/backface/README.md, "Clustered backface test").
 // cullRanges takes all runs of a query in one call (the method picked once, one resize of `out`,
 // survivors written through a raw cursor without a branch per element); cullRange is its one-run
 // case.
@@ -123,9 +123,9 @@ MaskChunk boundChunk(const BackfaceInput& input, std::span<const uint32_t> indic
   return c;
 }
 
-// ---- The batched per-frame passes (cullRanges). A PFD query on Freedoom MAP01 lists ~2,300 of
-// its tree's ~19,600 positions in ~80 runs (~30 positions each) of its ~900; the ~2,300 fragments
-// lie on only 595 distinct planes (a Doom level's walls, floors and ceilings). So per call each
+// ---- The batched per-frame passes (cullRanges). A PFD query lists a small share of its tree's
+// positions in short runs, and its fragments lie on far fewer distinct planes (a Doom level's
+// walls, floors and ceilings; docs/backface/README.md, "Lists (list_cull)"). So per call each
 // distinct plane is tested once, SIMD where the CPU has it (the same double expression as
 // isFrontFacing(), so the same result bit for bit), into a byte per plane, and every listed
 // position looks its polygon's plane's byte up: no per-position plane data (the index array is
@@ -206,7 +206,7 @@ void frontTableScalar(const PlaneArrays& a, const glm::dvec3& eye, uint8_t* fron
 
 // The lookups: per position its polygon's plane's byte (both tables in L1), a branch-free append.
 // The scalar and AVX2 paths (AVX-512 and AVX2 gathers of the same two lookups measured no faster
-// and 2.3x slower on Freedoom MAP01, Zen 5).
+// and slower: docs/backface/README.md, "Lists (list_cull)").
 uint32_t* tableRuns(const PlaneArrays& a, const uint8_t* front, const IndexRange* spans, const uint32_t* ids,
                     size_t n, uint32_t* dst) {
   return appendKept(a.idx, spans, ids, n, dst, [&](uint32_t i) { return front[a.poly_plane[a.idx[i]]] != 0; });
@@ -275,11 +275,12 @@ uint32_t* tableRuns(const PlaneArrays& a, const uint8_t* front, const IndexRange
 
 // ---- mask with the view cone (BackfaceOptions::MaskCone::kView, the default in lists): Zhang &
 // Hoff §3.1. Per call one mask from the view cone (view_dir, fov) over the clusters the culler's
-// positions use (a Doom level's ~70 of the grid's 1,536 at N = 16: walls' normals lie on the
-// cube's equator), then per position one lookup of its cluster's flag. Clusters are numbered
-// densely at build time (their `codes`), so a position stores one byte where there are at most
-// 256 of them, and with AVX-512 VBMI sixteen positions' flags are two byte permutes (vpermi2b
-// over 128-entry halves) and a blend; their ids are then compressed out in one vpcompressd.
+// positions use (a Doom level uses few of the grid's clusters: walls' normals lie on the cube's
+// equator; docs/backface/README.md, "Lists (list_cull)"), then per position one lookup of its
+// cluster's flag. Clusters are numbered densely at build time (their `codes`), so a position stores
+// one byte where there are at most 256 of them, and with AVX-512 VBMI sixteen positions' flags are
+// two byte permutes (vpermi2b over 128-entry halves) and a blend; their ids are then compressed out
+// in one vpcompressd.
 
 constexpr uint32_t kMaxByteCodes = 256;
 static_assert(kListCullOutSlack >= 16);  // viewMaskRunsVbmi's 16-lane store

@@ -43,10 +43,11 @@ class ListCuller {
   // over the normal clusters of all positions (one byte per position where they use at most 256
   // clusters). mask with kGroups: each range is cut into chunks of options.mask_group_size
   // positions (0: one chunk), each with its own cone around its bounding sphere, except that a
-  // chunk shorter than options.mask_list_min_chunk gets the plane test (a table costs more than
-  // the plane test on ~1,000 polygons); cluster, hierarchy: clusters are formed per range;
-  // cluster's culling probability is over options.cluster_eye_lo/hi, by default the box of all
-  // input.vertices (the eyes of a walkthrough are inside the scene).
+  // chunk shorter than options.mask_list_min_chunk gets the plane test (a table costs more to build
+  // than the plane test on a short chunk: docs/backface/README.md, "Lists (list_cull)"); cluster,
+  // hierarchy: clusters are formed per range; cluster's culling probability is over
+  // options.cluster_eye_lo/hi, by default the box of all input.vertices (the eyes of a walkthrough
+  // are inside the scene).
   static ListCuller build(const BackfaceInput& input, std::span<const uint32_t> indices,
                           std::span<const IndexRange> ranges, ListCullMethod method,
                           const BackfaceOptions& options = {});

@@ -10,18 +10,18 @@
 // 32 bytes per meshlet. No margin of ours: this is the library's test as documented, measured as
 // it is (false culls, if any, are the library's float arithmetic and are reported).
 //
-// Zero-area polygons (they were the 2,327 "false culls" `bench backface` reported in the Freedoom
-// MAP01 PFD lists):
+// Zero-area polygons (they were the "false culls" `bench backface` reported in the Freedoom MAP01
+// PFD lists; counts: docs/backface/README.md, "Meshlet cones"):
 // meshopt_computeClusterBounds (clusterizer.cpp) skips triangles whose float cross product is
 // exactly zero, as invisible, and returns all-zero bounds for a meshlet of only such triangles
 // (its comment: "degenerate cluster, no valid triangles => trivial reject (cone data is 0)"); the
 // documented test then reads 0 >= 0·|c − e| + 0 and culls it for every eye. Our ground truth (the polygon's plane) calls such a polygon front-facing from
 // its front side, so the bench counts it as a false cull; it has no pixels. Every such cull seen
-// was of this kind (BSP fragments of MAP01 that are points or segments, area <= 1.4e-10 in double,
+// was of this kind (BSP fragments of MAP01 that are points or segments, of tiny area in double,
 // exactly zero after rounding to float), or a sliver of the same kind whose float triangles have
-// an area made by rounding alone and so a normal unrelated to its plane (118 of the 2,327: segment-
-// like fragments up to 288 units long, float normals 27-117° off the plane). coneInvisiblePolygons()
-// names both kinds, so that a report can tell them apart from a culled polygon that has area.
+// an area made by rounding alone and so a normal unrelated to its plane (segment-like fragments
+// whose float normals lie far off the plane). coneInvisiblePolygons() names both kinds, so that a
+// report can tell them apart from a culled polygon that has area.
 #include <meshoptimizer.h>
 
 #include <algorithm>

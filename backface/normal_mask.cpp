@@ -114,7 +114,8 @@ std::array<glm::vec3, 4> NormalMaskGrid::cellCorners(uint16_t cell) const {
 void NormalMaskGrid::backTable(const glm::dvec3& axis, double sin_theta, Table& table) const {
   // Ids 6·N² .. 2046 are never given; a 16-byte load reads at most 15 entries past an id, so the
   // cells, 16 entries after them and kNeverCell with its padding are zeroed, not the whole 2 KB
-  // (whose memset was a tenth of the per-frame cost of a 1,882-polygon mesh).
+  // (whose memset was a visible share of the per-frame cost of a small mesh: docs/backface/README.md,
+  // "Normal masks").
   const size_t cell_count = static_cast<size_t>(6 * n_ * n_);
   std::memset(table.data(), 0, cell_count + kTablePadding);
   std::memset(table.data() + kNeverCell, 0, table.size() - kNeverCell);
@@ -192,10 +193,9 @@ bool sphereCone(const glm::dvec3& eye, const glm::dvec3& center, double radius, 
 namespace {
 
 // Mean polygons per run of one cluster id from which a group fills runs rather than reading the
-// table per polygon (measured: a fill costs about as much as eight single reads and stores), and
-// with the byte shuffle (16 reads per operation), from which it fills rather than shuffles: runs
-// of ~8 cost gen:dome (1,882 polygons, N = 7) 0.31 ns per polygon against 0.18 on the shuffled
-// 2,000-triangle sphere.
+// table per polygon (a fill costs about as much as kMinMeanRun single reads and stores), and
+// with the byte shuffle (16 reads per operation), from which it fills rather than shuffles: runs of
+// about kMinMeanRun cost more per polygon filled than shuffled (docs/backface/README.md, "Normal masks").
 constexpr uint32_t kMinMeanRun = 8;
 constexpr uint32_t kMinMeanRunShuffled = 32;
 
@@ -212,8 +212,8 @@ struct Block {
 
 // The lookups of one group's blocks [u, end) (units), one load and one PSHUFB per shuffle block,
 // one table read per unit elsewhere. The whole loop carries the target so the shuffle inlines (a
-// call per 16 units was most of the per-frame cost of a 2,000-polygon mesh). SSSE3 is not in the
-// project's baseline flags: the caller checks the CPU first.
+// call per 16 units was most of the per-frame cost of a small mesh: docs/backface/README.md,
+// "Normal masks"). SSSE3 is not in the project's baseline flags: the caller checks the CPU first.
 #ifdef WALKVIS_MASK_SHUFFLE
 [[gnu::target("ssse3")]] void lookupBlocksSsse3(const uint8_t* t, const uint16_t* cell, const uint8_t* offset,
                                                 const Block* blk, uint32_t begin, uint32_t end, uint8_t* out) {

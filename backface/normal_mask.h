@@ -21,11 +21,8 @@ namespace walkvis {
 // requested == 0, for a mesh of `polygons` polygons: the largest N with 6·N² <= polygons / 5, in
 // [4, 16]. The per-frame table tests 6·N² cells, so on small meshes it costs more than the one
 // AND per polygon it enables; Zhang & Hoff's table (§4) shows culling saturating with N (39.9% at
-// 6·8², 42.6% at 6·16²), so small meshes lose little. Measured (`walkvis bench backface`, 2,000
-// triangle sphere): N = 16 59.7% effective at 0.455 ns per polygon, N = 8 54.9% at 0.235-0.256;
-// 1,882-triangle dome (N = 7) 48.4% at 0.305; bunny (3,674 polygons, N = 11) 53.6% at 0.191.
-// (Since the shuffle loop inlines and short runs shuffle instead of filling: sphere 0.179, dome
-// 0.176, bunny 0.174, 70k sphere 0.078 ns per polygon, same effectiveness.)
+// 6·8², 42.6% at 6·16²), so small meshes lose little (the figures on our meshes:
+// docs/backface/README.md, "Normal masks").
 int maskResolutionFor(size_t polygons, int requested);
 
 class NormalMaskGrid {

@@ -51,17 +51,13 @@ struct PfdOptions {
   // kBalanced: undecided lines examined per split (>= 1). Without HFD the leaves are the cells of
   // the crossing lines whatever the order (nodes and the entropy bound do not change), so the
   // mean tests exceed the entropy bound by Σ over nodes of the node's area fraction × (1 − the
-  // binary entropy of its split): the more candidates, the more even the splits. freedoom2 MAP01
-  // mean tests ÷ entropy bound: 1.30 at 16, 1.23 at 32, 1.17 at 64, 1.157 at 128, 1.157 at 256
-  // (MAP03 1.32 -> 1.11, MAP05 1.29 -> 1.13 at 128), for ~8% more bytes and ~30% more build time.
-  // Scoring by the candidates still crossing each side (a·log2(1 + c)) or looking one split
-  // further both did worse than the area balance alone (MAP01, 16 and 64 candidates).
+  // binary entropy of its split): the more candidates, the more even the splits, up to about 128
+  // (docs/pfd/README.md, "The knobs of the test-line choice").
   uint32_t candidates = 128;
   // kBalanced, PFD (not HFD): candidates are also taken from beneath undecided lines, not only from
   // the frontier of the traversal. Every BSP line that crosses a region is tested somewhere below
   // it whatever the order, so testing a deeper line first changes neither the leaves nor the nodes,
-  // only how evenly the region is split. freedoom2 MAP17 (47 trees): nodes equal, area-weighted
-  // tests ÷ entropy 1.173 -> 1.107, trees above 1.3 × their entropy 11 -> 3, bytes +3.5%.
+  // only how evenly the region is split (docs/pfd/README.md, "The knobs of the test-line choice").
   // Under HFD a subtree may turn out hidden below, and a line tested ahead of it would be a
   // needless node: HFD keeps the frontier.
   bool deep_candidates = true;
@@ -70,20 +66,18 @@ struct PfdOptions {
   // least area-weighted mean tests (pfd_search.h: branch and bound over the sets of leaves a region
   // holds; in double precision, as it only picks which line to test: every classification stays
   // exact). 0 = off, also at the root. Small trees, whose few leaves are very unequal, are where the
-  // greedy even split is furthest from the optimum. search_work bounds the work (CellSearch::work,
-  // ~8 ns a unit) one tree may spend on such searches (then the greedy choice), so big trees pay a
-  // bounded amount: 4M, ~30 ms.
+  // greedy even split is furthest from the optimum. search_work bounds the work (CellSearch::work)
+  // one tree may spend on such searches (then the greedy choice), so big trees pay a bounded
+  // amount (docs/pfd/README.md, "What the search costs and gives").
   uint32_t search_lines = 16;
   uint64_t search_work = 4'000'000;
   // With search_lines > 0: the root's search applies where up to this many lines cross the whole
   // region (at most kPfdMaxSearchLines), with its own budget (not spent from search_work). A
   // completed search holds the best line for every region below it, which the nodes below then
   // follow (no search of their own), so a tree whose root search completes is optimal among trees
-  // testing these lines (PfdStats::tests_optimal). freedoom2 MAP27 (76 trees): 41 flagged optimal
-  // at 80 lines and 25M work (~0.2 s at most per tree), 1 with the greedy split alone; level 13 (65
-  // lines, 527 nodes) mean tests 9.00 -> 7.54, entropy 6.82, in 11M work. Trees of more lines rarely
-  // complete within any budget that is small beside their build (at 128 lines and 100M, 4 of MAP27's
-  // 12 trees of 81-128 lines).
+  // testing these lines (PfdStats::tests_optimal). Trees of more lines rarely complete within any
+  // budget that is small beside their build (docs/pfd/README.md, "The knobs of the test-line
+  // choice" and "What the search costs and gives").
   uint32_t root_search_lines = 80;
   uint64_t root_search_work = 25'000'000;
   // Clip off W the slivers (narrower than 1e-9 of the region's extent) that BSP lines cut from it

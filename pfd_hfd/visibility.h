@@ -27,14 +27,11 @@
 namespace walkvis {
 
 struct VisibilityOptions {
-  // Defaults from the speed-against-error sweep of `walkvis bench hfd` on freedoom2 MAP30
-  // (16,8,256: pixel error 8.9e-6 at 100 eyes per level, 64 px faces; 64,16,1024 gave 6.7e-6 at
-  // several times the build time; 16,8,128 was as accurate on MAP30 but breaks the sub-region
-  // monotonicity test): refinement buys far more accuracy per ray than uniform samples. On the
-  // 10k office (gen:office?rooms=404) the same sampling missed walls of one room seen from a
-  // region of many (pixel error 1.6e-4); a quarter of the region samples in front of the
-  // fragment (near_samples) cut the false-hidden rate on truly visible pairs by a factor of ~4
-  // at the same rays (docs/hfd/README.md), so the default stayed.
+  // Defaults from the speed-against-error sweeps of `walkvis bench hfd` (docs/hfd/README.md, "HFD
+  // sampling sweeps"): refinement buys far more accuracy per ray than uniform samples. Where one
+  // room's walls are tested from a region of many, samples in front of the fragment (near_samples)
+  // cut the false-hidden rate at the same rays (docs/hfd/README.md, "Samples in front of the
+  // fragment").
   uint32_t region_samples = 16;  // points on the region per test (stratified by area, plus its boundary)
   uint32_t polygon_samples = 8;  // points on the fragment per test, inset from its edges
   uint32_t refine_rays = 256;    // extra rays spent where visibility changes (0: uniform sampling only)

@@ -29,6 +29,7 @@
 
 #include "bsp/bsp.h"
 #include "commands.h"
+#include "plot.h"
 #include "core/byte_io.h"
 #include "core/rng.h"
 #include "core/sample.h"
@@ -145,89 +146,23 @@ struct HfdPoint {
   HfdSummary stats;
 };
 
-// 5 x 7 bitmap glyphs for the plot's labels: digits, '.', '-', 'e', 's'.
-const char* glyph(char c) {
-  static const char* digits[10] = {
-      "01110100011001110101110011000101110", "00100011000010000100001000010001110",
-      "01110100010000100010001000100011111", "11111000100010000010000011000101110",
-      "00010001100101010010111110001000010", "11111100001111000001000011000101110",
-      "00110010001000011110100011000101110", "11111000010001000100010000100001000",
-      "01110100011000101110100011000101110", "01110100011000101111000010001001100"};
-  if (c >= '0' && c <= '9') return digits[c - '0'];
-  switch (c) {
-    case '.': return "00000000000000000000000000110001100";
-    case '-': return "00000000000000011111000000000000000";
-    case 'e': return "00000000000111010001111111000001110";
-    case 's': return "00000000000111110000011100000111110";
-    default: return "00000000000000000000000000000000000";
-  }
-}
-
-struct Canvas {
-  int w, h;
-  std::vector<uint8_t> rgb;
-  Canvas(int width, int height) : w(width), h(height), rgb(static_cast<size_t>(width) * height * 3, 255) {}
-  void set(int x, int y, std::array<uint8_t, 3> c) {
-    if (x < 0 || y < 0 || x >= w || y >= h) return;
-    std::copy(c.begin(), c.end(), rgb.begin() + (static_cast<size_t>(y) * w + x) * 3);
-  }
-  void text(int x, int y, const std::string& s, std::array<uint8_t, 3> c = {0, 0, 0}) {
-    for (char ch : s) {
-      const char* g = glyph(ch);
-      for (int r = 0; r < 7; ++r)
-        for (int k = 0; k < 5; ++k)
-          if (g[r * 5 + k] == '1') set(x + k, y + r, c);
-      x += 6;
-    }
-  }
-};
-
-// One panel of the plot: build seconds across, log10 of `value` up from `emin` (0 is drawn at
-// the floor) to 0, each point labelled with its row number.
-void drawPanel(Canvas& cv, const std::vector<HfdPoint>& points, int y_top, int y_bottom, int emin,
-               double (*value)(const HfdPoint&)) {
-  const int x0 = 60, x1 = 620;
-  double smax = 0.0;
-  for (const auto& p : points) smax = std::max(smax, p.build_seconds);
-  smax = smax > 0.0 ? smax * 1.05 : 1.0;
-  const auto ey = [&](double e) {
-    const double l = std::clamp(e > 0.0 ? std::log10(e) : emin, static_cast<double>(emin), 0.0);
-    return static_cast<int>(y_bottom - (l - emin) / -emin * (y_bottom - y_top));
-  };
-  for (int x = x0; x <= x1; ++x) cv.set(x, y_bottom, {0, 0, 0});
-  for (int y = y_top; y <= y_bottom; ++y) cv.set(x0, y, {0, 0, 0});
-  for (int k = 0; k <= -emin; ++k) {
-    const int y = static_cast<int>(y_bottom - static_cast<double>(k) / -emin * (y_bottom - y_top));
-    for (int x = x0 - 4; x < x0; ++x) cv.set(x, y, {0, 0, 0});
-    for (int x = x0 + 1; x <= x1; x += 4) cv.set(x, y, {200, 200, 200});
-    cv.text(x0 - 40, y - 3, "1e" + std::to_string(k + emin));
-  }
-  for (int k = 0; k <= 4; ++k) {
-    const int x = static_cast<int>(x0 + k / 4.0 * (x1 - x0));
-    for (int y = y_bottom; y < y_bottom + 4; ++y) cv.set(x, y, {0, 0, 0});
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.3g", smax * k / 4.0);
-    cv.text(x - 10, y_bottom + 8, buf);
-  }
-  cv.text(x1 - 30, y_bottom + 24, "s");
-  for (size_t i = 0; i < points.size(); ++i) {
-    const int px = static_cast<int>(x0 + points[i].build_seconds / smax * (x1 - x0));
-    const int py = ey(value(points[i]));
-    const std::array<uint8_t, 3> c = points[i].vis.refine_rays ? std::array<uint8_t, 3>{200, 30, 30}
-                                                                : std::array<uint8_t, 3>{30, 30, 200};
-    for (int dy = -2; dy <= 2; ++dy)
-      for (int dx = -2; dx <= 2; ++dx) cv.set(px + dx, py + dy, c);
-    cv.text(px + 4, py - 10, std::to_string(i + 1), c);
-  }
-}
-
 // Top: pixel error ratio (1e-7 to 1); bottom: the share of eyes with a miss (1e-4 to 1), which
 // average pixel error hides. Both against build seconds.
+// Each point labelled with its row number, red where refinement was on.
 void drawPlot(const std::vector<HfdPoint>& points, const std::string& path) {
+  double smax = 0.0;
+  for (const auto& p : points) smax = std::max(smax, p.build_seconds);
+  const PlotAxis seconds{0.0, smax > 0.0 ? smax * 1.05 : 1.0, false, "s"};
+  std::vector<PlotPoint> error, missing;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Rgb c = points[i].vis.refine_rays ? Rgb{200, 30, 30} : Rgb{30, 30, 200};
+    error.push_back({points[i].build_seconds, points[i].stats.pixel_error_ratio, c, std::to_string(i + 1)});
+    missing.push_back({points[i].build_seconds, points[i].stats.eyes_with_miss, c, std::to_string(i + 1)});
+  }
   Canvas cv(640, 900);
-  drawPanel(cv, points, 20, 430, -7, [](const HfdPoint& p) { return p.stats.pixel_error_ratio; });
-  drawPanel(cv, points, 490, 850, -4, [](const HfdPoint& p) { return p.stats.eyes_with_miss; });
-  writePngRgb(path, cv.w, cv.h, cv.rgb);
+  drawPanel(cv, error, 60, 620, 20, 430, seconds, PlotAxis{-7.0, 0.0, true, ""});
+  drawPanel(cv, missing, 60, 620, 490, 850, seconds, PlotAxis{-4.0, 0.0, true, ""});
+  cv.write(path);
 }
 
 int runHfdBench(const HfdBenchArgs& args) {

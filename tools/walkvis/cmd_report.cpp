@@ -4,18 +4,22 @@
 // and images under DIR, then writes the page from what they wrote: the scene (a frame, a plan
 // per level), build costs, validation (order errors, z-buffer errors per bit depth, diff images
 // of the worst views), rejection statistics (listed / visible / missed per level, per-eye
-// histograms) and frame times per mode against the floor and the ideal. A command that fails
+// histograms), frame times per mode against the floor and the ideal, and for a scene the
+// speed-against-error sweeps (HFD sampling, normal-mask cells, Johannsen-Carter T/R), each plotted
+// (plot.h). A command that fails
 // stops the report with its name and status; index.html is written last, through a temporary
 // file, so a page that exists is complete.
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <span>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -24,12 +28,17 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "plot.h"
 #include "core/byte_io.h"
 #include "pfd_hfd/pfd.h"
 #include "walkthrough/validate.h"
 
 namespace walkvis {
 namespace {
+
+// The backface sweeps' points: normal-mask cells per cube-face side, and Johannsen-Carter T/R.
+constexpr std::array<const char*, 6> kMaskCells = {"2", "4", "6", "8", "12", "16"};
+constexpr std::array<const char*, 6> kClusterTr = {"0.1", "0.25", "0.5", "1", "2", "4"};
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
@@ -124,27 +133,6 @@ class Steps {
   std::chrono::steady_clock::time_point t0_;
 };
 
-// A bar chart without text (the page labels it): one bar per value, heights against the largest.
-void writeBarChart(const fs::path& path, const std::vector<double>& values, uint32_t rgb) {
-  constexpr int kW = 280, kH = 120, kPad = 8;
-  std::vector<uint8_t> img(static_cast<size_t>(kW) * kH * 3, 255);
-  auto put = [&](int x, int y, uint32_t c) {
-    if (x < 0 || y < 0 || x >= kW || y >= kH) return;
-    uint8_t* p = &img[(static_cast<size_t>(y) * kW + x) * 3];
-    p[0] = static_cast<uint8_t>(c >> 16), p[1] = static_cast<uint8_t>(c >> 8), p[2] = static_cast<uint8_t>(c);
-  };
-  const double top = values.empty() ? 0.0 : *std::max_element(values.begin(), values.end());
-  const int n = std::max<int>(1, static_cast<int>(values.size()));
-  const int slot = (kW - 2 * kPad) / n;
-  for (int i = 0; i < static_cast<int>(values.size()); ++i) {
-    const int h = top > 0.0 ? static_cast<int>(std::lround((kH - 2 * kPad) * values[i] / top)) : 0;
-    for (int x = kPad + i * slot + 2; x < kPad + (i + 1) * slot - 2; ++x)
-      for (int y = kH - kPad - h; y < kH - kPad; ++y) put(x, y, rgb);
-  }
-  for (int x = kPad; x < kW - kPad; ++x) put(x, kH - kPad, 0x404040);
-  writePngRgb(path.string(), kW, kH, img);
-}
-
 class Page {
  public:
   void h2(const std::string& t) { html_ << "<h2>" << htmlEscape(t) << "</h2>\n"; }
@@ -205,7 +193,8 @@ int runReport(const ReportArgs& args) {
   const bool is_tree = isTreeFile(args.source);
   const std::string scene = is_tree ? args.scene : args.source;
   const std::string tree = is_tree ? args.source : (dir / "tree.wvt").string();
-  Steps steps(self, dir, (scene.empty() ? 0 : 8) + (is_tree ? 0 : 1) + 5);  // info and 7 sweeps; build; the rest
+  // Info and the sweeps' steps (HFD sampling; kMaskCells and kClusterTr for backface), the build, the rest.
+  Steps steps(self, dir, (scene.empty() ? 0 : 2 + kMaskCells.size() + kClusterTr.size()) + (is_tree ? 0 : 1) + 5);
 
   Json info, build;
   if (!scene.empty())
@@ -262,13 +251,26 @@ int runReport(const ReportArgs& args) {
                                       fmt(m.value("ns_per_polygon", 0.0), 3), fmt(m.value("bytes_per_polygon", 0.0), 2),
                                       std::to_string(m.value("false_culls", 0))};
     };
-    // One step each for the two backface sweeps (three points each).
-    for (const char* n : {"2", "4", "8"})
-      mask_rows.push_back(row(n, backface(std::string("normal-mask resolution ") + n,
-                                          {"--only", "mask", "--mask-n", n}, std::string("mask-") + n + ".json")));
-    for (const char* t : {"0.1", "0.5", "2"})
-      tr_rows.push_back(row(t, backface(std::string("Johannsen-Carter T/R ") + t, {"--only", "cluster", "--tr", t},
-                                        std::string("cluster-tr-") + t + ".json")));
+    // One step per point of the two backface sweeps; each is a row and a point of its plot (time per
+    // polygon across, effectiveness up, labelled with the knob's value).
+    auto sweep = [&](const char* what, const char* name, const char* option, std::span<const char* const> values,
+                     std::vector<std::vector<std::string>>& rows, const char* png) {
+      std::vector<PlotPoint> points;
+      for (const char* v : values) {
+        const Json m = backface(std::string(what) + " " + v, {"--only", name, option, v},
+                                std::string(name) + "-" + v + ".json");
+        rows.push_back(row(v, m));
+        points.push_back({m.value("ns_per_polygon", 0.0), m.value("effectiveness", 0.0), Rgb{30, 30, 200}, v});
+      }
+      double xmax = 0.0;
+      for (const PlotPoint& q : points) xmax = std::max(xmax, q.x);
+      Canvas cv(640, 440);
+      drawPanel(cv, points, 60, 620, 20, 400, PlotAxis{0.0, xmax > 0.0 ? xmax * 1.1 : 1.0, false, "ns"},
+                PlotAxis{0.0, 1.0, false, ""});
+      cv.write((dir / png).string());
+    };
+    sweep("normal-mask resolution", "mask", "--mask-n", kMaskCells, mask_rows, "mask-sweep.png");
+    sweep("Johannsen-Carter T/R", "cluster", "--tr", kClusterTr, tr_rows, "cluster-sweep.png");
   }
 
   Page page;
@@ -380,7 +382,7 @@ int runReport(const ReportArgs& args) {
         labels += (labels.empty() ? "" : ", ") + bucket + ": " + std::to_string(count);
       }
       const std::string name = std::string(key) + ".png";
-      writeBarChart(dir / name, values, colour);
+      writeBarChart((dir / name).string(), values, colour);
       page.img(name, std::string(what) + " (" + labels + ")");
     }
   }
@@ -436,8 +438,12 @@ int runReport(const ReportArgs& args) {
            "the share culled and the share of back faces found (effectiveness) against the time per polygon. "
            "A conservative method never culls a front face (false culls 0).");
     page.p("Normal mask, cells per cube-face side:");
+    if (fs::exists(dir / "mask-sweep.png"))
+      page.img("mask-sweep.png", "Normal mask: effectiveness (up, 0 to 1) against ns per polygon, by cells per side");
     page.table({"cells", "culled", "effectiveness", "ns per polygon", "bytes per polygon", "false culls"}, mask_rows);
     page.p("Johannsen&ndash;Carter clusters, T/R (cluster test time over vertex time):");
+    if (fs::exists(dir / "cluster-sweep.png"))
+      page.img("cluster-sweep.png", "Johannsen-Carter clusters: effectiveness (up, 0 to 1) against ns per polygon, by T/R");
     page.table({"T/R", "culled", "effectiveness", "ns per polygon", "bytes per polygon", "false culls"}, tr_rows);
     page.p("Z-buffer precision against order errors: the table under Validation.");
   }

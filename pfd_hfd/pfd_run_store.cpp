@@ -63,8 +63,15 @@ uint32_t PfdRunStore::findOrAddSeq(std::span<const uint32_t> items, uint32_t len
 
 uint32_t PfdRunStore::refLength(uint32_t ref) const {
   if (ref == kPfdEmptyRef) return 0;
-  if (ref & kPfdSeqBit) return tree_.seqs[ref & ~kPfdSeqBit].length;
-  if (ref & kPfdObjectBit) return tree_.objects[ref & ~kPfdObjectBit].fragments;
+  if (ref & kPfdSeqBit) {
+    WALKVIS_DCHECK((ref & ~kPfdSeqBit) < tree_.seqs.size());
+    return tree_.seqs[ref & ~kPfdSeqBit].length;
+  }
+  if (ref & kPfdObjectBit) {
+    WALKVIS_DCHECK((ref & ~kPfdObjectBit) < tree_.objects.size());  // objects are added before they are asked about
+    return tree_.objects[ref & ~kPfdObjectBit].fragments;
+  }
+  WALKVIS_DCHECK(ref < tree_.runs.size());
   return tree_.runs[ref].count;
 }
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/check.h"
+
 namespace walkvis {
 
 CubeFrame cubeFrame(int face) {
@@ -27,6 +29,7 @@ glm::dvec3 pixelRay(const View& view, int i, int j) {
 }
 
 std::array<float, 16> clipFromEyeRelative(const View& view) {
+  WALKVIS_DCHECK(view.size > 0 && view.near > 0.0 && view.far > view.near);
   const CubeFrame f = cubeFrame(view.face);
   const double n = view.near, fa = view.far;
   // Camera space: x = right·p, y = up·p, z = -forward·p (looking down -z).
@@ -56,6 +59,7 @@ namespace walkvis {
 // FreeCamera: yaw about +y (0 looks along -z, positive towards -x), pitch up; a standard OpenGL
 // perspective with the vertical field of view fov_y and the image's aspect ratio.
 std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera) {
+  WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
   const double cp = std::cos(camera.pitch), sp = std::sin(camera.pitch);
   const double cy = std::cos(camera.yaw), sy = std::sin(camera.yaw);
   const glm::dvec3 forward(-sy * cp, sp, -cy * cp);

@@ -14,6 +14,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "core/check.h"
+
 namespace walkvis {
 namespace {
 
@@ -229,6 +231,7 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
     }
   }
   stats.drawn = static_cast<uint32_t>(draw.size());
+  WALKVIS_DCHECK(stats.listed == stats.drawn + stats.culled);  // FrameStats' rule: what was listed is drawn or culled
   stats.order_ms = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
   objects_.resize(world.objects.size());

@@ -2,7 +2,7 @@
 # The BSP splitting-plane knobs, each against the defaults (docs/bsp/README.md, "Knobs"): N/n,
 # depth and build CPU of `walkvis bench bsp` (least-crossed) per scene and setting, one build each
 # (N/n and depth are deterministic; CPU seconds are one run on a noisy machine).
-# Usage: docs/bsp/knobs.sh [OUT_DIR]   (Release build: scripts/build release)
+# Usage: docs/bsp/knobs.sh [OUT_DIR]   (Release build: scripts/build release; SCENES=a,b for others)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 W=${WALKVIS:-$root/build/release/tools/walkvis/walkvis}
@@ -10,7 +10,7 @@ out=${1:-$root/out/bsp-knobs}
 [ -x "$W" ] || { echo "$0: $W not built (scripts/build release)" >&2; exit 2; }
 mkdir -p "$out"
 wad=/usr/share/games/doom/freedoom2.wad
-scenes="$wad:MAP10,$wad:MAP14,$wad:MAP26,gen:office?rooms=300&furniture=6,/usr/share/assimp/models/IFC/AC14-FZK-Haus.ifc"
+scenes=${SCENES:-"$wad:MAP10,$wad:MAP14,$wad:MAP26,gen:office?rooms=300&furniture=6,/usr/share/assimp/models/IFC/AC14-FZK-Haus.ifc"}
 settings=(
   "default|"
   "free-first|--free-first true"

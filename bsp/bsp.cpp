@@ -197,30 +197,31 @@ std::string bspStructureProblem(const BspTree& tree) {
       return "fragment " + std::to_string(i) + " has a bad orientation";
   }
   if (nn == 0 ? tree.root != -1 : tree.root != 0) return "bad root";
+  // The message is made only for the node that breaks a rule: a loaded tree may have millions.
+  const auto bad = [](size_t i, const char* what) { return "node " + std::to_string(i) + ": " + what; };
   std::vector<uint8_t> covered(nf, 0);
   uint64_t listed = 0;
   for (size_t i = 0; i < nn; ++i) {
     const BspNode& n = tree.nodes[i];
-    const std::string node = "node " + std::to_string(i);
     const auto idx = static_cast<int32_t>(i);
-    if (i == 0 ? n.parent != -1 : (n.parent < 0 || n.parent >= idx)) return node + ": bad parent";
+    if (i == 0 ? n.parent != -1 : (n.parent < 0 || n.parent >= idx)) return bad(i, "bad parent");
     if (i > 0) {
       const BspNode& p = tree.nodes[static_cast<size_t>(n.parent)];
-      if (p.front != idx && p.back != idx) return node + ": parent does not link to it";
-      if (n.depth != p.depth + 1) return node + ": bad depth";
+      if (p.front != idx && p.back != idx) return bad(i, "parent does not link to it");
+      if (n.depth != p.depth + 1) return bad(i, "bad depth");
     } else if (n.depth != 1) {
-      return node + ": bad depth";
+      return bad(i, "bad depth");
     }
     for (int32_t c : {n.front, n.back})
       if (c != -1 && (c <= idx || static_cast<uint64_t>(c) >= nn || tree.nodes[static_cast<size_t>(c)].parent != idx))
-        return node + ": bad child";
-    if (n.front != -1 && n.front == n.back) return node + ": bad child";
+        return bad(i, "bad child");
+    if (n.front != -1 && n.front == n.back) return bad(i, "bad child");
     // Only a separator (a plane between detail groups, bsp.h) holds no fragment.
     if ((n.fragment_count == 0) != (n.polygon == kSeparatorPolygon) ||
         static_cast<uint64_t>(n.first_fragment) + n.fragment_count > nf)
-      return node + ": fragments out of range";
+      return bad(i, "fragments out of range");
     for (uint32_t f = n.first_fragment; f < n.first_fragment + n.fragment_count; ++f) {
-      if (covered[f]) return node + ": fragment listed twice";
+      if (covered[f]) return bad(i, "fragment listed twice");
       covered[f] = 1;
       const Plane& q = tree.fragments[f].plane;
       const int8_t o = q.n == n.plane.n && q.d == n.plane.d ? 1 : q.n == -n.plane.n && q.d == -n.plane.d ? -1 : 0;

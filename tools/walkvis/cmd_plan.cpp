@@ -30,7 +30,9 @@
 #include "build_setup.h"
 #include "commands.h"
 #include "core/rng.h"
+#include "core/sample.h"
 #include "pfd_hfd/pfd.h"
+#include "scenes/scene.h"
 
 namespace walkvis {
 namespace {
@@ -88,22 +90,13 @@ std::string hours(double seconds) {
   return t;
 }
 
-// Whether p lies inside ring r (crossings of a ray towards +x; either orientation).
-bool insideRing(const std::vector<glm::dvec2>& r, const glm::dvec2& p) {
-  bool in = false;
-  for (size_t i = 0, j = r.size() - 1; i < r.size(); j = i++)
-    if ((r[i].y > p.y) != (r[j].y > p.y) && p.x < r[j].x + (p.y - r[j].y) * (r[i].x - r[j].x) / (r[i].y - r[j].y))
-      in = !in;
-  return in;
-}
-
-// A uniformly random walkable point of `level` inside `box`: a point of the box kept when some
-// ring holds it. nullopt when 1,000 tries miss.
+// A uniformly random walkable point of `level` inside `box`: a point of the box kept when one of
+// the walkable region's convex pieces holds it. nullopt when 1,000 tries miss.
 std::optional<glm::dvec2> walkablePoint(const FloorLevel& level, const PfdBox& box, Rng& rng) {
   for (int tries = 0; tries < 1000; ++tries) {
     const glm::dvec2 p{rng.uniform(box.lo.x, box.hi.x), rng.uniform(box.lo.y, box.hi.y)};
     for (const auto& r : level.walkable)
-      if (insideRing(r, p)) return p;
+      if (insideConvexRing(r, p)) return p;
   }
   return std::nullopt;
 }
@@ -160,7 +153,7 @@ CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& 
     double area = 0.0, weight = 0.0;
   };
   std::vector<Tile> tiles;
-  double total_weight = 0.0;
+  std::vector<double> cumulative;  // running sum of the tiles' weights, for pickByWeight
   const glm::dvec2 step = (hi - lo) / static_cast<double>(kTiles);
   for (int i = 0; i < kTiles; ++i)
     for (int k = 0; k < kTiles; ++k) {
@@ -171,10 +164,11 @@ CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& 
       t.area = c.area;
       t.weight = c.area * (1.0 + static_cast<double>(c.crossing));
       if (!(t.weight > 0.0)) continue;
-      total_weight += t.weight;
+      cumulative.push_back((cumulative.empty() ? 0.0 : cumulative.back()) + t.weight);
       tiles.push_back(t);
     }
   if (tiles.empty()) return e;
+  const double total_weight = cumulative.back();
   Rng rng{mixHash(seed, cell.level)};
   auto window = [&](const glm::dvec2& c, double half) {
     PfdCellJob job = cell;
@@ -186,15 +180,7 @@ CellEstimate estimateByWindows(const PfdCellContext& context, const PfdCellJob& 
   std::optional<double> fixed_seconds;
   double sum_s = 0.0, sum_b = 0.0, sum_r = 0.0;
   for (uint32_t k = 0; k < count; ++k) {
-    double pick = rng.uniform() * total_weight;
-    const Tile* tile = &tiles.back();
-    for (const Tile& t : tiles) {
-      pick -= t.weight;
-      if (pick < 0.0) {
-        tile = &t;
-        break;
-      }
-    }
+    const Tile* tile = &tiles[pickByWeight(cumulative, rng.state)];
     const std::optional<glm::dvec2> c = walkablePoint(level, tile->box, rng);
     if (!c) continue;
     if (!fixed_seconds) fixed_seconds = window(*c, 0.005 * side).seconds;
@@ -266,6 +252,7 @@ int runPlan(const PlanArgs& args) {
     bool over = false;
   };
   std::vector<Sampled> sampled(m);
+  const uint32_t timing_eyes = queryTimingEyes(args.build.stat_eyes, n);
   const PfdCellContext context{&setup->file.bsp, setup->scene.levels, setup->scene.eye_height, setup->options};
   tbb::task_arena one_thread(1);
   for (size_t k = 0; k < m; ++k) {
@@ -275,7 +262,6 @@ int runPlan(const PlanArgs& args) {
     s.index = std::clamp<size_t>(static_cast<size_t>(std::upper_bound(cumulative.begin() + lo, cumulative.begin() + hi + 1, middle) -
                                                      cumulative.begin()) - 1, lo, hi - 1);
     const auto c0 = std::chrono::steady_clock::now();
-    const uint32_t timing_eyes = queryTimingEyes(args.build.stat_eyes, n);
     CellCost cost;
     one_thread.execute([&] {
       if (by_windows && jobs[s.index].box == std::nullopt) {

@@ -24,7 +24,11 @@ for s in "${settings[@]}"; do
   name=${s%%|*}
   read -r -a opts <<<"${s#*|}"
   echo "bench bsp: $name ${opts[*]:-}" >&2
-  "$W" bench bsp --scenes "$scenes" --runs 1 --json "${opts[@]}" >"$out/$name.json.tmp" || true
+  # bench bsp exits 1 when a scene misses its N/n target (FZK-Haus does) but still prints its JSON;
+  # any other failure leaves JSON the table below cannot read, and the script stops there.
+  rc=0
+  "$W" bench bsp --scenes "$scenes" --runs 1 --json "${opts[@]}" >"$out/$name.json.tmp" || rc=$?
+  [ "$rc" -le 1 ] || { echo "$0: bench bsp $name exited $rc" >&2; exit 2; }
   mv "$out/$name.json.tmp" "$out/$name.json"
 done
 python3 - "$out" "${settings[@]}" <<'PY'

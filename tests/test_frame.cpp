@@ -90,7 +90,7 @@ TEST(FrameBuilder, FourModesDrawTheSameIdsImage) {
     for (OrderMode mode : {OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd}) {
       const FrameStats s = builder.build(world, camera, mode, draw);
       EXPECT_EQ(s.drawn, draw.size());
-      EXPECT_EQ(s.listed, s.drawn + s.culled);
+      EXPECT_EQ(s.listed, s.drawn + s.culled + s.outside);
       if (mode != OrderMode::kBsp) {
         EXPECT_EQ(s.used, mode) << "the eye is on the height plane inside the region";
         EXPECT_EQ(s.level, 0);
@@ -108,6 +108,53 @@ TEST(FrameBuilder, FourModesDrawTheSameIdsImage) {
   // Same triangles, same float positions: only z-buffer depth ties (coplanar surfaces at 24 bits)
   // may differ. Tolerance: 0.1% of the pixels compared.
   EXPECT_LE(differing, pixels / 1000) << differing << " of " << pixels << " pixels differ";
+}
+
+// Frustum culling (World::frustum_culling) leaves out only what GL would clip: in every mode the ids
+// image is bit-identical with and without it, the list is the unculled list with some fragments
+// taken out (order kept), and it takes out many, also for cameras looking up and down.
+TEST(FrameBuilder, FrustumCullingKeepsTheImage) {
+  Offscreen o = makeOffscreen();
+  WorldOptions options;
+  options.build_pfd = true;
+  options.cull = ListCullMethod::kRegion;
+  World world = openWorld("gen:office", options);
+  o.drawer.upload(world.trees.bsp, world.scene);
+  FrameBuilder builder;
+  std::vector<uint32_t> culled, all, culled_ids, all_ids;
+  uint64_t outside = 0, listed = 0;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> pitch(-1.2, 1.2);
+  for (FreeCamera camera : officeCameras(world, 12, 9)) {
+    camera.pitch = pitch(rng);
+    for (OrderMode mode : {OrderMode::kZBuffer, OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd}) {
+      DrawSettings settings;
+      settings.style = DrawStyle::kIds;
+      settings.depth_test = mode == OrderMode::kZBuffer;
+      settings.cull_back_faces = mode == OrderMode::kZBuffer;
+      world.frustum_culling = true;
+      const FrameStats s = builder.build(world, camera, mode, culled);
+      world.frustum_culling = false;
+      const FrameStats u = builder.build(world, camera, mode, all);
+      EXPECT_EQ(u.outside, 0u);
+      EXPECT_EQ(s.listed, u.listed);
+      EXPECT_EQ(s.drawn + s.outside, u.drawn);
+      size_t at = 0;  // culled is a subsequence of all: the kept fragments, in the same order
+      for (uint32_t f : all)
+        if (at < culled.size() && culled[at] == f) ++at;
+      EXPECT_EQ(at, culled.size()) << orderModeName(mode);
+      outside += s.outside;
+      listed += s.listed;
+      o.drawer.draw(camera, culled, settings);
+      o.drawer.readIds(kW, kH, culled_ids);
+      o.drawer.draw(camera, all, settings);
+      o.drawer.readIds(kW, kH, all_ids);
+      EXPECT_TRUE(culled_ids == all_ids) << orderModeName(mode) << " at yaw " << camera.yaw << ", pitch " << camera.pitch;
+    }
+  }
+  std::printf("%llu of %llu listed fragments outside the view\n", static_cast<unsigned long long>(outside),
+              static_cast<unsigned long long>(listed));
+  EXPECT_GT(outside, listed / 4) << "a 70-degree view leaves out much of what the order lists";
 }
 
 // The normal mask culls from the view cone through the image's corners (list_cull.h): it may drop
@@ -256,7 +303,16 @@ TEST(BenchFrames, FloorAndIdealFrameEveryMode) {
       EXPECT_EQ(m["pixels_differing_from_zbuffer"], 0);
       continue;
     }
-    if (mode == "ideal") saw_ideal = true;
+    if (mode == "ideal") {
+      saw_ideal = true;
+      // Paired frame by frame with itself: every ratio is 1.
+      EXPECT_EQ(m["ideal_fraction_paired"].get<double>(), 1.0);
+      EXPECT_EQ(m["ideal_fraction_paired_halves"], nlohmann::json::array({1.0, 1.0}));
+    } else {
+      EXPECT_GT(m["ideal_fraction_paired"].get<double>(), 0.0) << mode;
+      EXPECT_EQ(m["ideal_fraction_paired_halves"].size(), 2u) << mode;
+    }
+    EXPECT_GE(m["outside_median"].get<double>(), 0.0) << mode;
     if (mode != "zbuffer" && mode != "ideal") {
       EXPECT_LE(ideal_drawn, m["drawn_median"].get<double>()) << mode;
     }

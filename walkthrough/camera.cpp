@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <glm/geometric.hpp>
+
 #include "core/check.h"
 
 namespace walkvis {
@@ -58,13 +60,50 @@ namespace walkvis {
 
 // FreeCamera: yaw about +y (0 looks along -z, positive towards -x), pitch up; a standard OpenGL
 // perspective with the vertical field of view fov_y and the image's aspect ratio.
-std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera) {
-  WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
+CubeFrame cameraFrame(const FreeCamera& camera) {
   const double cp = std::cos(camera.pitch), sp = std::sin(camera.pitch);
   const double cy = std::cos(camera.yaw), sy = std::sin(camera.yaw);
-  const glm::dvec3 forward(-sy * cp, sp, -cy * cp);
-  const glm::dvec3 right(cy, 0.0, -sy);  // forward × +y, normalised (pitch does not tilt it)
-  const glm::dvec3 up(sy * sp, cp, cy * sp);  // right × forward
+  CubeFrame frame;
+  frame.forward = {-sy * cp, sp, -cy * cp};
+  frame.right = {cy, 0.0, -sy};  // forward × +y, normalised
+  frame.up = {sy * sp, cp, cy * sp};
+  return frame;
+}
+
+ViewFrustum viewFrustum(const FreeCamera& camera) {
+  WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
+  const CubeFrame frame = cameraFrame(camera);
+  const double ty = std::tan(0.5 * camera.fov_y);
+  const double tx = ty * static_cast<double>(camera.width) / static_cast<double>(camera.height);
+  ViewFrustum v;
+  v.eye = camera.eye;
+  v.forward = frame.forward;
+  v.near = camera.near;
+  v.far = camera.far;
+  // A point p - eye = x right + y up + w forward is inside where |x| <= w tx and |y| <= w ty.
+  v.inward[0] = (tx * frame.forward - frame.right) / std::sqrt(1.0 + tx * tx);
+  v.inward[1] = (tx * frame.forward + frame.right) / std::sqrt(1.0 + tx * tx);
+  v.inward[2] = (ty * frame.forward - frame.up) / std::sqrt(1.0 + ty * ty);
+  v.inward[3] = (ty * frame.forward + frame.up) / std::sqrt(1.0 + ty * ty);
+  return v;
+}
+
+bool ViewFrustum::excludesBall(const glm::dvec3& centre, double radius) const {
+  const glm::dvec3 c = centre - eye;
+  // GL gets float positions relative to the eye and a float matrix: their rounding (~6e-8 of the
+  // distance each) could move a vertex just inside a plane that double arithmetic put it outside
+  // of, so the ball grows by 1e-6 of the farthest distance it reaches, ten times more than that.
+  const double r = radius + 1e-6 * (radius + std::abs(c.x) + std::abs(c.y) + std::abs(c.z));
+  for (const glm::dvec3& n : inward)
+    if (glm::dot(n, c) < -r) return true;
+  const double w = glm::dot(forward, c);
+  return w < near - r || w > far + r;
+}
+
+std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera) {
+  WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
+  const CubeFrame frame = cameraFrame(camera);
+  const glm::dvec3 forward = frame.forward, right = frame.right, up = frame.up;
   const double f = 1.0 / std::tan(0.5 * camera.fov_y);
   const double aspect = static_cast<double>(camera.width) / static_cast<double>(camera.height);
   const double n = camera.near, fa = camera.far;

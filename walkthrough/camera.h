@@ -55,6 +55,22 @@ struct FreeCamera {
   double near = 0.05, far = 1e4;      // camera depth, 0 < near < far
 };
 
+// The camera's orthonormal frame: forward is where it looks, right stays level (pitch does not
+// tilt it), up = right × forward.
+CubeFrame cameraFrame(const FreeCamera& camera);
+
+// The camera's view volume as six planes, for culling on the CPU before GL sees a polygon.
+struct ViewFrustum {
+  glm::dvec3 eye{0.0};
+  glm::dvec3 inward[4];  // unit normals of the side planes through the eye, pointing inside
+  glm::dvec3 forward{0.0};
+  double near = 0.0, far = 0.0;
+  // True only when the whole ball lies outside one of the planes, so nothing in it can reach a
+  // pixel: a polygon inside such a ball can be left out without changing the image.
+  bool excludesBall(const glm::dvec3& centre, double radius) const;
+};
+ViewFrustum viewFrustum(const FreeCamera& camera);
+
 // Column-major clip matrix for positions relative to the eye (p - eye), as clipFromEyeRelative(View).
 std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera);
 

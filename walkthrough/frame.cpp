@@ -58,10 +58,9 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 // The circular cone around the camera's frustum (list_cull.h's view cone): the full apex angle
 // through the image's corners.
 BackfaceView backfaceView(const FreeCamera& camera, const glm::dvec3& eye) {
-  const double cp = std::cos(camera.pitch);
   BackfaceView view;
   view.eye = eye;
-  view.view_dir = glm::dvec3(-std::sin(camera.yaw) * cp, std::sin(camera.pitch), -std::cos(camera.yaw) * cp);
+  view.view_dir = cameraFrame(camera).forward;
   const double aspect = static_cast<double>(camera.width) / std::max(camera.height, 1);
   const double t = std::tan(0.5 * camera.fov_y);
   view.fov = std::min(2.0 * std::atan(t * std::sqrt(1.0 + aspect * aspect)), 3.14);
@@ -131,6 +130,8 @@ World openWorld(const std::string& source, const WorldOptions& options,
   }
   const BspTree& bsp = world.trees.bsp;
   const uint32_t n = static_cast<uint32_t>(bsp.fragments.size());
+  world.fragment_balls.reserve(n);
+  for (const Polygon& f : bsp.fragments) world.fragment_balls.push_back(polygonBall(bsp.vertices, f));
   world.objects = makeObjects(options.objects, options.scene.empty() ? source : options.scene, world.scene, n);
   if (options.cull != ListCullMethod::kNone) {
     say(std::string("building list cullers (") + std::string(listCullMethodName(options.cull)) + ")");
@@ -230,8 +231,18 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
       stats.culled = n - static_cast<uint32_t>(draw.size());
     }
   }
+  if (world.frustum_culling && world.fragment_balls.size() == n) {
+    // In place: the order of what stays is the order that was made.
+    const ViewFrustum frustum = viewFrustum(camera);
+    const auto kept = std::remove_if(draw.begin(), draw.end(), [&](uint32_t f) {
+      return frustum.excludesBall(world.fragment_balls[f].centre, world.fragment_balls[f].radius);
+    });
+    stats.outside = static_cast<uint32_t>(draw.end() - kept);
+    draw.erase(kept, draw.end());
+  }
   stats.drawn = static_cast<uint32_t>(draw.size());
-  WALKVIS_DCHECK(stats.listed == stats.drawn + stats.culled);  // FrameStats' rule: what was listed is drawn or culled
+  // FrameStats' rule: what was listed is drawn, culled or outside.
+  WALKVIS_DCHECK(stats.listed == stats.drawn + stats.culled + stats.outside);
   stats.order_ms = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
   objects_.resize(world.objects.size());

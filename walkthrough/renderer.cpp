@@ -294,13 +294,9 @@ void OffscreenRenderer::upload(std::span<const glm::dvec3> vertices, std::span<c
     }
     s.fan_start.push_back(static_cast<uint32_t>(s.fan_indices.size()));
     if (valid) {
-      glm::dvec3 c(0.0);
-      for (uint32_t v = 0; v < p.vertex_count; ++v) c += vertices[p.first_vertex + v];
-      c /= static_cast<double>(p.vertex_count);
-      double r = 0.0;
-      for (uint32_t v = 0; v < p.vertex_count; ++v) r = std::max(r, glm::length(vertices[p.first_vertex + v] - c));
-      s.centres[k] = c;
-      s.radii[k] = r;
+      const Ball ball = polygonBall(vertices, p);
+      s.centres[k] = ball.centre;
+      s.radii[k] = ball.radius;
     }
   }
   s.vertices = std::move(own_vertices);

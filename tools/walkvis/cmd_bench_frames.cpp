@@ -2,12 +2,15 @@
 // the z-buffer baseline (all fragments, depth test and GL back-face culling on), painter's BSP
 // (back faces skipped in the traversal), painter's PFD (trees of a PFD tree file, or built in memory
 // for a scene), and painter's HFD with each backface method (an HFD tree file: the source or --hfd).
-// Per mode: median frame time (order + draw + glFinish), median polygons drawn, speedup over the
+// Every mode leaves out the fragments wholly outside the view frustum (FrameBuilder; not with
+// --no-frustum-culling). Per mode: median frame time (order + draw + glFinish), median polygons drawn, speedup over the
 // z-buffer, and the fraction of the ideal it reaches. Two reference runs frame every mode's time:
 // the floor (the same frames with nothing drawn: clear, the eye-relative vertex upload, glFinish),
 // and the ideal (drawing exactly the fragments the z-buffer frame shows, in BSP order, with no
 // order cost: what a perfect visibility method would draw). ideal_fraction = ideal time / mode
-// time, so 1 means the mode is as fast as drawing only what is seen. Every mode, the floor and the
+// time, so 1 means the mode is as fast as drawing only what is seen; ideal_fraction_paired is the
+// median over frames of that ratio frame by frame, and its halves the same from the even and the
+// odd rounds alone, whose distance tells its noise. Every mode, the floor and the
 // ideal run the whole tour once per round, rounds in rotated order, and the medians are over all
 // rounds; frame_ms_round_spread (the range of the rounds' medians over their median) tells how far
 // the noise reaches, to compare with the differences between modes. Order check: on every --check-every'th frame the painter's ids image is compared with
@@ -38,6 +41,7 @@ struct FramesBenchArgs {
   uint32_t check_every = 10;
   uint32_t rounds = 3;
   std::string objects = "auto";
+  bool frustum_culling = true;
   bool json = false;
 };
 
@@ -46,6 +50,31 @@ double medianOf(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t m = v.size() / 2;
   return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+// Per frame of the tour, the median of its times over the rounds whose index r has r % step ==
+// first (step 1: all rounds). frame_ms holds round after round, `frames` times each.
+std::vector<double> perFrameMedians(const std::vector<double>& frame_ms, size_t frames, uint32_t first, uint32_t step) {
+  std::vector<double> medians(frames), times;
+  for (size_t k = 0; k < frames; ++k) {
+    times.clear();
+    for (size_t r = first; (r + 1) * frames <= frame_ms.size(); r += step) times.push_back(frame_ms[r * frames + k]);
+    medians[k] = medianOf(times);
+  }
+  return medians;
+}
+
+// The median over the frames of the ideal's time over the mode's, each frame's times the median of
+// its rounds (those picked by first and step): a paired figure, so that a frame dear for every
+// mode (a wide view of big walls) weighs the same in both.
+double pairedIdealFraction(const std::vector<double>& ideal_ms, const std::vector<double>& mode_ms, size_t frames,
+                           uint32_t first, uint32_t step) {
+  const std::vector<double> ideal = perFrameMedians(ideal_ms, frames, first, step);
+  const std::vector<double> mode = perFrameMedians(mode_ms, frames, first, step);
+  std::vector<double> ratios;
+  for (size_t k = 0; k < frames; ++k)
+    if (mode[k] > 0.0) ratios.push_back(ideal[k] / mode[k]);
+  return medianOf(ratios);
 }
 
 enum class RunKind : uint8_t { kMode, kFloor, kIdeal };
@@ -58,7 +87,8 @@ struct ModeRun {
 };
 
 struct ModeSamples {
-  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, object_triangles, round_medians;
+  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, outside, object_triangles,
+      round_medians;
   uint64_t bsp_fallbacks = 0;
 };
 
@@ -77,6 +107,7 @@ int runFramesBench(const FramesBenchArgs& args) {
   base.objects = parseObjectSet(args.objects);
   std::vector<std::unique_ptr<World>> worlds;
   worlds.push_back(std::make_unique<World>(openWorld(args.source, base, progress)));
+  worlds.back()->frustum_culling = args.frustum_culling;
   const World& main = *worlds.back();
   // The z-buffer world: the same scene and BSP, no trees, no list culler.
   auto zworld = std::make_unique<World>();
@@ -85,6 +116,8 @@ int runFramesBench(const FramesBenchArgs& args) {
   zworld->trees.eye_height = main.trees.eye_height;
   zworld->source = main.source;
   zworld->objects = main.objects;
+  zworld->fragment_balls = main.fragment_balls;
+  zworld->frustum_culling = main.frustum_culling;
   worlds.push_back(std::move(zworld));
   const World& zbuffer_world = *worlds.back();
 
@@ -105,6 +138,7 @@ int runFramesBench(const FramesBenchArgs& args) {
       if (worlds.back()->trees.bsp.fragments.size() != main.trees.bsp.fragments.size())
         throw Error(hfd_file + ": its BSP differs from the source's");
       worlds.back()->objects = main.objects;  // the same objects whatever the tree file's spec
+      worlds.back()->frustum_culling = main.frustum_culling;
       runs.push_back({"hfd+" + std::string(listCullMethodName(m)), OrderMode::kHfd, worlds.back().get()});
     }
   }
@@ -149,7 +183,7 @@ int runFramesBench(const FramesBenchArgs& args) {
     if (objects) {  // the build only places the mesh objects the ideal draws after its list; not timed
       stats = builder.build(*run.world, camera, OrderMode::kBsp, draw, path.keys[k].time);
       stats.order_ms = stats.object_ms = 0.0;
-      stats.tests = stats.culled = 0;
+      stats.tests = stats.culled = stats.outside = 0;
     }
     const std::span<const uint32_t> list =
         run.kind == RunKind::kIdeal ? std::span<const uint32_t>(ideal[k]) : std::span<const uint32_t>();
@@ -182,6 +216,7 @@ int runFramesBench(const FramesBenchArgs& args) {
         m.listed.push_back(st.listed);
         m.tests.push_back(st.tests);
         m.culled.push_back(st.culled);
+        m.outside.push_back(st.outside);
         if (r == 0 && runs[i].kind == RunKind::kMode && runs[i].mode != OrderMode::kZBuffer && st.used != runs[i].mode)
           ++m.bsp_fallbacks;
       }
@@ -200,6 +235,7 @@ int runFramesBench(const FramesBenchArgs& args) {
   out["objects"] = main.objects.size();
   out["checked_frames"] = truth.size();
   out["rounds"] = rounds;
+  out["frustum_culling"] = main.frustum_culling;
   const double zbuffer_ms = medianOf(samples[zbuffer_run].frame_ms);
   const double floor_ms = medianOf(samples[floor_run].frame_ms);
   const double ideal_ms = medianOf(samples[ideal_run].frame_ms);
@@ -209,8 +245,8 @@ int runFramesBench(const FramesBenchArgs& args) {
   out["ideal_speedup"] = ideal_ms > 0.0 ? zbuffer_ms / ideal_ms : 0.0;
   auto rows = nlohmann::ordered_json::array();
   if (!args.json)
-    std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %9s %7s %7s %11s\n", "mode", "frame_ms", "order_ms", "draw_ms",
-                "drawn", "listed", "tests", "culled", "speedup", "ideal", "spread", "diff_pixels");
+    std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %8s %9s %7s %7s %11s\n", "mode", "frame_ms", "order_ms",
+                "draw_ms", "drawn", "listed", "tests", "culled", "outside", "speedup", "ideal", "spread", "diff_pixels");
   for (size_t i = 0; i < runs.size(); ++i) {
     const ModeRun& run = runs[i];
     const ModeSamples& m = samples[i];
@@ -226,6 +262,13 @@ int runFramesBench(const FramesBenchArgs& args) {
     const double med = medianOf(m.frame_ms);
     const double speedup = med > 0.0 ? zbuffer_ms / med : 0.0;
     const double ideal_fraction = med > 0.0 ? ideal_ms / med : 0.0;
+    const size_t frames = path.keys.size();
+    const std::vector<double>& ideal_samples = samples[ideal_run].frame_ms;
+    const double paired = pairedIdealFraction(ideal_samples, m.frame_ms, frames, 0, 1);
+    // The same figure from the even and from the odd rounds alone: how far apart they fall tells
+    // the noise of the paired figure (with one round, both are that round's).
+    const double paired_even = pairedIdealFraction(ideal_samples, m.frame_ms, frames, 0, rounds > 1 ? 2 : 1);
+    const double paired_odd = pairedIdealFraction(ideal_samples, m.frame_ms, frames, rounds > 1 ? 1 : 0, rounds > 1 ? 2 : 1);
     const auto [lo, hi] = std::minmax_element(m.round_medians.begin(), m.round_medians.end());
     const double spread = med > 0.0 ? (*hi - *lo) / med : 0.0;
     rows.push_back({{"mode", run.name},
@@ -237,15 +280,18 @@ int runFramesBench(const FramesBenchArgs& args) {
                     {"listed_median", medianOf(m.listed)},
                     {"tests_median", medianOf(m.tests)},
                     {"culled_median", medianOf(m.culled)},
+                    {"outside_median", medianOf(m.outside)},
                     {"object_triangles_median", medianOf(m.object_triangles)},
                     {"speedup_vs_zbuffer", speedup},
                     {"ideal_fraction", ideal_fraction},
+                    {"ideal_fraction_paired", paired},
+                    {"ideal_fraction_paired_halves", {paired_even, paired_odd}},
                     {"bsp_fallback_frames", m.bsp_fallbacks},
                     {"pixels_differing_from_zbuffer", diff_pixels}});
     if (!args.json)
-      std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %9.2f %6.0f%% %6.1f%% %11llu\n", run.name.c_str(),
-                  med, medianOf(m.order_ms), medianOf(m.draw_ms), medianOf(m.drawn), medianOf(m.listed),
-                  medianOf(m.tests), medianOf(m.culled), speedup, 100.0 * ideal_fraction, 100.0 * spread,
+      std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %8.0f %9.2f %6.0f%% %6.1f%% %11llu\n",
+                  run.name.c_str(), med, medianOf(m.order_ms), medianOf(m.draw_ms), medianOf(m.drawn),
+                  medianOf(m.listed), medianOf(m.tests), medianOf(m.culled), medianOf(m.outside), speedup, 100.0 * ideal_fraction, 100.0 * spread,
                   static_cast<unsigned long long>(diff_pixels));
   }
   out["modes"] = rows;
@@ -280,6 +326,8 @@ void addBenchFrames(CLI::App& bench, CommandRunner& runner) {
       ->check(CLI::Range(1u, 1000u));
   sub->add_option("--objects", args->objects,
                   "Mesh objects: auto (the animated blob in gen:office) | none | blob (in the start room)");
+  sub->add_flag("!--no-frustum-culling", args->frustum_culling,
+                "Give GL every listed fragment, also those wholly outside the view frustum (every mode)");
   sub->add_flag("--json", args->json, "Print JSON");
   sub->callback([args, &runner] { runner = [args] { return runFramesBench(*args); }; });
 }

@@ -1,33 +1,48 @@
 #!/usr/bin/env bash
-# Frame times against their floor and the ideal (docs/frames/README.md): builds the HFD trees of
-# the office and three Freedoom maps into DIR, then runs `walkvis bench frames` on each and prints
-# one table per scene. Usage: docs/frames/bench.sh DIR [ROUNDS]. Run it on an idle machine.
+# Makes the tables of docs/frames/README.md again: bench frames on each scene with its default HFD
+# tree, with the frustum culling of the frames and without it (--no-frustum-culling).
+# usage: docs/frames/bench.sh DIR [ROUNDS]   (SCENES="a b" overrides the scenes)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 W="$root/build/release/tools/walkvis/walkvis"
 dir=${1:?usage: docs/frames/bench.sh DIR [ROUNDS]}
-rounds=${2:-5}
+rounds=${2:-20}
 doom=/usr/share/games/doom
 mkdir -p "$dir"
-scenes=(gen:office "$doom/freedoom2.wad:MAP01" "$doom/freedoom2.wad:MAP08" "$doom/freedoom1.wad:E1M1")
+if [[ -n "${SCENES:-}" ]]; then
+  read -r -a scenes <<< "$SCENES"
+else
+  scenes=(gen:office "gen:office?rooms=300&furniture=6" "$doom/freedoom2.wad:MAP01" "$doom/freedoom2.wad:MAP08"
+          "$doom/freedoom1.wad:E1M1")
+fi
+name_of() { basename "$1" | tr ':.?&=' '_____'; }
 for s in "${scenes[@]}"; do
-  name=$(basename "$s" | tr ':.' '__')
+  name=$(name_of "$s")
   [[ -f "$dir/$name.wvt" ]] || "$W" build "$s" --tree hfd -o "$dir/$name.wvt" > /dev/null 2>&1
   "$W" bench frames "$dir/$name.wvt" --scene "$s" --frames 120 --rounds "$rounds" --json > "$dir/$name.json" 2>/dev/null
+  "$W" bench frames "$dir/$name.wvt" --scene "$s" --frames 120 --rounds "$rounds" --no-frustum-culling --json \
+    > "$dir/$name.all.json" 2>/dev/null
 done
-python3 - "$dir" "${scenes[@]}" <<'PY'
+pairs=()
+for s in "${scenes[@]}"; do pairs+=("$(name_of "$s")" "$s"); done
+python3 - "$dir" "${pairs[@]}" <<'PY'
 import json, sys
 d = sys.argv[1]
-for s in sys.argv[2:]:
-    name = s.rsplit('/', 1)[-1].replace(':', '_').replace('.', '_')
-    j = json.load(open(f"{d}/{name}.json"))
-    print(f"\n{s}: {j['scene_polygons']} fragments, {j['frames']} frames x {j['rounds']} rounds; "
-          f"floor {j['floor_ms_median']:.3f} ms, ideal {j['ideal_ms_median']:.3f} ms drawing "
-          f"{j['ideal_drawn_median']:.0f} ({j['ideal_speedup']:.2f}x the z-buffer)")
-    print("| mode | frame ms | round spread | drawn | speed-up | of the ideal | pixels off |")
-    print("|---|---|---|---|---|---|---|")
-    for m in j["modes"]:
-        print(f"| {m['mode']} | {m['frame_ms_median']:.3f} | {100 * m['frame_ms_round_spread']:.0f}% | "
-              f"{m['drawn_median']:.0f} | {m['speedup_vs_zbuffer']:.2f} | {100 * m['ideal_fraction']:.0f}% | "
-              f"{m['pixels_differing_from_zbuffer']} |")
+names, scenes = sys.argv[2::2], sys.argv[3::2]
+print("| scene | frustum culling | z-buffer ms (drawn) | floor ms | ideal ms (drawn) | ideal speed-up | "
+      "HFD+region ms (drawn, outside) | HFD speed-up | HFD of the ideal, paired (even, odd rounds) | "
+      "range over the six HFD modes, paired |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for s, name in zip(scenes, names):
+    for suffix, label in (("", "on"), (".all", "off")):
+        j = json.load(open(f"{d}/{name}{suffix}.json"))
+        modes = {m["mode"]: m for m in j["modes"]}
+        z, h = modes["zbuffer"], modes["hfd+region"]
+        hfd = [m["ideal_fraction_paired"] for m in j["modes"] if m["mode"].startswith("hfd+")]
+        even, odd = h["ideal_fraction_paired_halves"]
+        print(f"| {s.rsplit('/', 1)[-1]} | {label} | {z['frame_ms_median']:.3f} ({z['drawn_median']:.0f}) | "
+              f"{j['floor_ms_median']:.3f} | {j['ideal_ms_median']:.3f} ({j['ideal_drawn_median']:.0f}) | "
+              f"{j['ideal_speedup']:.2f} | {h['frame_ms_median']:.3f} ({h['drawn_median']:.0f}, {h['outside_median']:.0f}) | "
+              f"{h['speedup_vs_zbuffer']:.2f} | {100 * h['ideal_fraction_paired']:.1f}% ({100 * even:.1f}%, {100 * odd:.1f}%) | "
+              f"{100 * min(hfd):.1f}–{100 * max(hfd):.1f}% |")
 PY

@@ -54,6 +54,7 @@ TEST(Report, PageRendersInChromiumWithEveryImage) {
     if (end != std::string::npos) sources.insert(html.substr(begin, end - begin));
   }
   EXPECT_GE(sources.size(), 4u);
+  EXPECT_EQ(sources.count("zbuffer-bits.png"), 1u) << "the depth precision's speed against error";
   for (const std::string& s : sources) EXPECT_TRUE(fs::exists(page / s)) << s;
   EXPECT_EQ(html.find("http"), std::string::npos) << "the page must not reach the network";
 

@@ -163,6 +163,14 @@ TEST(ValidateCommand, JsonHasTheReportedKeys) {
   EXPECT_TRUE(j.at("zbuffer_error_pixels").contains("16"));
   EXPECT_TRUE(j.at("zbuffer_error_pixels").contains("32"));
   EXPECT_FALSE(j.at("zbuffer_error_pixels").contains("24"));
+  // Each precision's own drawing time, a part of the whole render time.
+  double zbuffer_seconds = 0.0;
+  for (const char* bits : {"16", "32"}) {
+    const double s = j.at("zbuffer").at(bits).at("render_seconds").get<double>();
+    EXPECT_GT(s, 0.0) << bits;
+    zbuffer_seconds += s;
+  }
+  EXPECT_LE(zbuffer_seconds, j.at("seconds").at("render").get<double>());
 
   runCommand(std::string(WALKVIS_BINARY) + " validate gen:office --zbits 12 2>/dev/null", status);
   EXPECT_EQ(WEXITSTATUS(status), 2);

@@ -298,7 +298,7 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
   for (auto& r : zbuffers) r.upload(vertices, polygons);
   if (painter_only) painter_only->upload(vertices, polygons);
   for (size_t k = 0; k < zbuffers.size(); ++k)
-    result.zbuffer.push_back({options.zbits[k], zbuffers[k].depthFormat(), {}});
+    result.zbuffer.push_back({options.zbits[k], zbuffers[k].depthFormat(), {}, 0.0});
 
   for (const Polygon& p : polygons) {
     if (p.first_vertex <= vertices.size() && p.vertex_count <= vertices.size() - p.first_vertex &&
@@ -347,8 +347,10 @@ ValidationResult runValidation(const Scene& scene, std::span<const glm::dvec3> v
       painter.drawPainter(view, order_ids);
       painter.readIds(painter_ids);
       for (size_t z = 0; z < zbuffers.size(); ++z) {
+        const auto tz = Clock::now();
         zbuffers[z].drawZBuffer(view);
         zbuffers[z].readIds(z_ids[z]);
+        result.zbuffer[z].render_seconds += since(tz);
       }
       result.render_seconds += since(t0);
       t0 = Clock::now();

@@ -103,6 +103,7 @@ struct ZBufferResult {
   int bits = 0;
   std::string depth_format;
   PixelCounts counts;
+  double render_seconds = 0.0;  // drawing and reading back this precision's images, all views
 };
 
 struct ViewReport {

@@ -326,6 +326,7 @@ int runReport(const ReportArgs& args) {
            " bytes written.");
 
   page.h2("Validation");
+  const double images = std::max(1.0, static_cast<double>(vbsp.value("views", 0)));  // one image per view
   rows.clear();
   for (const auto* v : {&vbsp, &vtree}) {
     rows.push_back({v->value("order", "?"), std::to_string(v->value("views", 0)),
@@ -339,9 +340,32 @@ int runReport(const ReportArgs& args) {
     for (const auto& [bits, z] : vbsp["zbuffer"].items())
       rows.push_back({bits, z.value("depth_format", ""), std::to_string(z.value("order_error_pixels", 0)),
                       std::to_string(z.value("missed_pixels", 0)), std::to_string(z.value("tie_pixels", 0)),
-                      std::to_string(z.value("edge_pixels", 0))});
+                      std::to_string(z.value("edge_pixels", 0)), fmt(1e3 * z.value("render_seconds", 0.0) / images, 3)});
   page.p("The z-buffer against the same exact images, per depth precision:");
-  page.table({"bits", "format", "errors", "missed", "ties", "edge"}, rows);
+  page.table({"bits", "format", "errors", "missed", "ties", "edge", "ms per image"}, rows);
+  if (vbsp.contains("zbuffer") && !vbsp["zbuffer"].empty()) {
+    // Speed against error for the depth precision: time per image across, the share of pixels in
+    // error up (log, down to one pixel in error; none in error is drawn at the floor), each point
+    // labelled with its bits.
+    const double exact = std::max(1.0, static_cast<double>(vbsp.value("exact_pixels", 0)));
+    std::vector<PlotPoint> points;
+    double xmax = 0.0, lowest = 1.0 / exact, highest = 0.0;
+    for (const auto& [bits, z] : vbsp["zbuffer"].items()) {
+      const double ratio = z.value("order_error_pixels", 0) / exact;
+      points.push_back({1e3 * z.value("render_seconds", 0.0) / images, ratio, Rgb{200, 30, 30}, bits});
+      xmax = std::max(xmax, points.back().x);
+      if (ratio > 0.0) lowest = std::min(lowest, ratio);
+      highest = std::max(highest, ratio);
+    }
+    Canvas cv(640, 440);
+    drawPanel(cv, points, 60, 620, 20, 400, PlotAxis{0.0, xmax > 0.0 ? xmax * 1.1 : 1.0, false, "ms"},
+              PlotAxis{std::floor(std::log10(lowest)), highest > 0.0 ? std::ceil(std::log10(highest)) : 0.0,
+                       true, ""});
+    cv.write((dir / "zbuffer-bits.png").string());
+    page.img("zbuffer-bits.png",
+             "Depth precision: milliseconds per image (drawing and reading back) across, the share of the exact "
+             "pixels the z-buffer gets wrong up, per depth-buffer bits");
+  }
   int shown = 0;
   for (const char* sub : {"diff-bsp", "diff-tree"}) {
     std::vector<fs::path> diffs;

@@ -344,6 +344,7 @@ int runValidate(const ValidateArgs& args) {
     zerr[std::to_string(z.bits)] = z.counts.order_error;
     auto d = countsJson(z.counts);
     d["depth_format"] = z.depth_format;
+    d["render_seconds"] = z.render_seconds;
     zdetail[std::to_string(z.bits)] = d;
   }
   j["zbuffer_error_pixels"] = zerr;

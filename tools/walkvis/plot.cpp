@@ -9,7 +9,7 @@
 namespace walkvis {
 namespace {
 
-// 5 x 7 bitmap glyphs, row by row: digits, '.', '-', 'e', 'n', 's'; anything else is blank.
+// 5 x 7 bitmap glyphs, row by row: digits, '.', '-', 'e', 'm', 'n', 's'; anything else is blank.
 const char* glyph(char c) {
   static const char* digits[10] = {
       "01110100011001110101110011000101110", "00100011000010000100001000010001110",
@@ -22,6 +22,7 @@ const char* glyph(char c) {
     case '.': return "00000000000000000000000000110001100";
     case '-': return "00000000000000011111000000000000000";
     case 'e': return "00000000000111010001111111000001110";
+    case 'm': return "00000000001101010101101011000110001";
     case 'n': return "00000000001011011001100011000110001";
     case 's': return "00000000000111110000011100000111110";
     default: return "00000000000000000000000000000000000";

@@ -1,5 +1,5 @@
 // Small PNG charts for the benchmarks and the report, drawn pixel by pixel with no font or plotting
-// library: 5 × 7 glyphs for the numbers on the axes (digits, '.', '-', 'e', 'n', 's'; other characters
+// library: 5 × 7 glyphs for the numbers on the axes (digits, '.', '-', 'e', 'm', 'n', 's'; other characters
 // are blank), points labelled with short numbers, and a bar chart whose page labels it.
 #pragma once
 

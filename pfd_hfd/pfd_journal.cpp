@@ -19,7 +19,7 @@ namespace {
 
 constexpr char kMagic[8] = {'W', 'V', 'J', 'R', 'N', 'L', '\r', '\n'};
 constexpr uint32_t kVersion = 3;  // 3: outcomes carry their query timing
-constexpr size_t kHeaderBytes = 24;
+constexpr size_t kHeaderBytes = kPfdJournalHeaderBytes;
 
 // A job's identity in the journal: its bytes without the cost estimate, which does not decide its
 // tree. (A string rather than a byte vector as the map key: GCC 12 warns falsely on comparing vectors.)

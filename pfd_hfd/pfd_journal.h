@@ -3,6 +3,7 @@
 // cells it had (docs/DESIGN.md, "Builds across processes and restarts").
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -26,6 +27,7 @@ uint64_t pfdBuildFingerprint(const TreeFile& head, std::span<const FloorLevel> l
 // key, u64 outcome bytes, pfdCellOutcomeBytes). A record is written with one write() and synced
 // before the build goes on; a record cut short by a kill, or one whose checksum fails, ends the
 // journal there (it is truncated on open).
+constexpr size_t kPfdJournalHeaderBytes = 24;
 class PfdJournal {
  public:
   // Opens `path` for a build with `fingerprint`: keeps its records when its header matches and

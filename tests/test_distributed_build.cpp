@@ -173,14 +173,14 @@ TEST(DistributedBuild, KilledAtRandomMomentsAndRerunWritesTheSameBytes) {
   fs::remove_all(dir);
 }
 
-// Kills the build as soon as its journal holds a cell's record (more than the 24-byte header),
+// Kills the build as soon as its journal holds a cell's record (more than its header),
 // however long the scene and the first cells take on a loaded machine; true when it ended first.
 bool runUntilJournaled(const fs::path& output, int& status) {
   const fs::path journal = output.string() + ".journal";
   const auto journaled = [&journal] {
     std::error_code error;
     const uintmax_t size = fs::file_size(journal, error);
-    return !error && size > 24;
+    return !error && size > kPfdJournalHeaderBytes;
   };
   return runUntilKilled(output, std::chrono::seconds(240), status, journaled);
 }

@@ -34,11 +34,15 @@ FreeCamera randomCamera(Rng& rng) {
   return c;
 }
 
-// Inside the image and the depth range, by the camera's own perspective (double arithmetic).
+// Inside the image and the depth range, by the camera's perspective in double, from camera_path.h's
+// conventions (yaw about +y, 0 looking along -z; pitch up), not from camera.cpp's frame.
 bool seen(const FreeCamera& c, const glm::dvec3& p) {
-  const CubeFrame f = cameraFrame(c);
+  const double cp = std::cos(c.pitch);
+  const glm::dvec3 forward(-std::sin(c.yaw) * cp, std::sin(c.pitch), -std::cos(c.yaw) * cp);
+  const glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(0.0, 1.0, 0.0)));
+  const glm::dvec3 up = glm::cross(right, forward);
   const glm::dvec3 q = p - c.eye;
-  const double x = glm::dot(f.right, q), y = glm::dot(f.up, q), w = glm::dot(f.forward, q);
+  const double x = glm::dot(right, q), y = glm::dot(up, q), w = glm::dot(forward, q);
   const double ty = std::tan(0.5 * c.fov_y), tx = ty * c.width / c.height;
   return w >= c.near && w <= c.far && std::abs(x) <= w * tx && std::abs(y) <= w * ty;
 }

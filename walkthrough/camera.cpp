@@ -70,22 +70,35 @@ CubeFrame cameraFrame(const FreeCamera& camera) {
   return frame;
 }
 
-ViewFrustum viewFrustum(const FreeCamera& camera) {
-  WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
-  const CubeFrame frame = cameraFrame(camera);
-  const double ty = std::tan(0.5 * camera.fov_y);
-  const double tx = ty * static_cast<double>(camera.width) / static_cast<double>(camera.height);
+namespace {
+
+// A point p - eye = x right + y up + w forward is inside where |x| <= w tx, |y| <= w ty and
+// near <= w <= far.
+ViewFrustum frustumOf(const glm::dvec3& eye, const CubeFrame& frame, double tx, double ty, double near, double far) {
   ViewFrustum v;
-  v.eye = camera.eye;
+  v.eye = eye;
   v.forward = frame.forward;
-  v.near = camera.near;
-  v.far = camera.far;
-  // A point p - eye = x right + y up + w forward is inside where |x| <= w tx and |y| <= w ty.
+  v.near = near;
+  v.far = far;
   v.inward[0] = (tx * frame.forward - frame.right) / std::sqrt(1.0 + tx * tx);
   v.inward[1] = (tx * frame.forward + frame.right) / std::sqrt(1.0 + tx * tx);
   v.inward[2] = (ty * frame.forward - frame.up) / std::sqrt(1.0 + ty * ty);
   v.inward[3] = (ty * frame.forward + frame.up) / std::sqrt(1.0 + ty * ty);
   return v;
+}
+
+}  // namespace
+
+ViewFrustum viewFrustum(const FreeCamera& camera) {
+  WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
+  const double ty = std::tan(0.5 * camera.fov_y);
+  const double tx = ty * static_cast<double>(camera.width) / static_cast<double>(camera.height);
+  return frustumOf(camera.eye, cameraFrame(camera), tx, ty, camera.near, camera.far);
+}
+
+ViewFrustum viewFrustum(const View& view) {
+  WALKVIS_DCHECK(view.size > 0 && view.near > 0.0 && view.far > view.near);
+  return frustumOf(view.eye, cubeFrame(view.face), 1.0, 1.0, view.near, view.far);
 }
 
 bool ViewFrustum::excludesBall(const glm::dvec3& centre, double radius) const {

@@ -59,7 +59,8 @@ struct FreeCamera {
 // tilt it), up = right × forward.
 CubeFrame cameraFrame(const FreeCamera& camera);
 
-// The camera's view volume as six planes, for culling on the CPU before GL sees a polygon.
+// A view volume as six planes, for culling on the CPU before GL sees a polygon: a person's camera
+// or a cube face (whose sides lie at 45 degrees).
 struct ViewFrustum {
   glm::dvec3 eye{0.0};
   glm::dvec3 inward[4];  // unit normals of the side planes through the eye, pointing inside
@@ -70,6 +71,7 @@ struct ViewFrustum {
   bool excludesBall(const glm::dvec3& centre, double radius) const;
 };
 ViewFrustum viewFrustum(const FreeCamera& camera);
+ViewFrustum viewFrustum(const View& view);
 
 // Column-major clip matrix for positions relative to the eye (p - eye), as clipFromEyeRelative(View).
 std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera);

@@ -102,6 +102,7 @@ World openWorld(const std::string& source, const WorldOptions& options,
   World world;
   world.source = source;
   world.cull = options.cull;
+  world.frustum_culling = options.frustum_culling;
   if (isTreeFile(source)) {
     say("loading tree file " + source);
     world.trees = loadTreeFile(source);
@@ -231,7 +232,8 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
       stats.culled = n - static_cast<uint32_t>(draw.size());
     }
   }
-  if (world.frustum_culling && world.fragment_balls.size() == n) {
+  if (world.frustum_culling) {
+    WALKVIS_DCHECK(world.fragment_balls.size() == n);  // World's rule: a ball per fragment
     // In place: the order of what stays is the order that was made.
     const ViewFrustum frustum = viewFrustum(camera);
     const auto kept = std::remove_if(draw.begin(), draw.end(), [&](uint32_t f) {

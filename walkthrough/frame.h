@@ -44,6 +44,7 @@ struct WorldOptions {
   // Mesh objects (mesh_object.h): kAuto puts the animated blob in the default scene (gen:office).
   // For a tree file the spec checked is `scene` when given.
   ObjectSet objects = ObjectSet::kAuto;
+  bool frustum_culling = true;   // World::frustum_culling
 };
 
 // Everything frames need, built once: the scene, its BSP, the trees when there are any (a tree
@@ -60,9 +61,10 @@ struct World {
   // Drawn after the scene in every mode; their ids start at N (the fragment count).
   std::vector<MeshObject> objects;
   bool object_culling = true;              // Möller–Séquin culling while subdividing (else full Loop)
-  // Per BSP fragment, a ball around it: a fragment whose ball lies outside the view frustum is left
-  // out of the frame (FrameStats::outside). The image stays the same: GL would have clipped it
-  // away, after transforming its corners and setting up its triangles.
+  // Per BSP fragment, a ball around it (one per fragment whenever frustum_culling is on): a fragment
+  // whose ball lies outside the view frustum is left out of the frame (FrameStats::outside). The
+  // image stays the same: GL would have clipped it away, after transforming its corners and
+  // setting up its triangles.
   std::vector<Ball> fragment_balls;
   bool frustum_culling = true;
   // The level whose height plane the eye is on (|eye.y − height| within 1e-9 of the height's scale:
@@ -79,7 +81,7 @@ struct FrameStats {
   uint32_t scene_polygons = 0;  // BSP fragments N
   uint32_t listed = 0;          // from the order source, before culling
   uint32_t culled = 0;          // by the backface method
-  uint32_t outside = 0;         // front faces (or not culled) wholly outside the view frustum
+  uint32_t outside = 0;         // of what the backface method kept: wholly outside the view frustum
   uint32_t drawn = 0;           // listed - culled - outside
   uint32_t tests = 0;           // plane tests (PFD/HFD: the path's and the detail objects'; BSP: nodes visited)
   double order_ms = 0.0;        // query + culling

@@ -66,8 +66,7 @@ struct OffscreenRenderer::Impl {
   std::vector<uint32_t> fan_start;      // polygon k's triangles: fan_indices[fan_start[k], fan_start[k + 1])
   std::vector<float> eye_relative;      // 3 floats per vertex, for last_eye
   std::vector<uint32_t> order_indices;  // reused per draw
-  std::vector<glm::dvec3> centres;      // per polygon: bounding sphere (centre, radius)
-  std::vector<double> radii;
+  std::vector<Ball> balls;              // per polygon: around its corners
   std::vector<uint8_t> outside;         // per polygon, for the current view: entirely outside the frustum
   glm::dvec3 last_eye{0.0};
   bool positions_valid = false;
@@ -109,22 +108,13 @@ struct OffscreenRenderer::Impl {
   }
 
   // Frustum culling on the CPU: llvmpipe transforms every vertex it is given, and a cube face sees
-  // about a sixth of the scene. A polygon is skipped only when its bounding sphere is entirely
-  // outside one frustum plane, so it could not have covered a pixel: the image is unchanged. The
-  // spheres are padded by 1e-6 of their distance for the float positions GL receives.
+  // about a sixth of the scene. A polygon is skipped only when its ball lies wholly outside the
+  // view (ViewFrustum, with its margin for the float positions GL receives), so it could not have
+  // covered a pixel: the image is unchanged.
   void cullToFrustum(const View& view) {
-    const CubeFrame f = cubeFrame(view.face);
-    const size_t n = centres.size();
-    outside.resize(n);
-    const double sqrt2 = std::sqrt(2.0);
-    for (size_t k = 0; k < n; ++k) {
-      const glm::dvec3 c = centres[k] - view.eye;
-      const double x = glm::dot(f.right, c), y = glm::dot(f.up, c), w = glm::dot(f.forward, c);
-      const double r = radii[k] + 1e-6 * (std::abs(x) + std::abs(y) + std::abs(w));
-      const double rs = r * sqrt2;
-      outside[k] = x + w < -rs || w - x < -rs || y + w < -rs || w - y < -rs || w < view.near - r ||
-                   w > view.far + r;
-    }
+    const ViewFrustum frustum = viewFrustum(view);
+    outside.resize(balls.size());
+    for (size_t k = 0; k < balls.size(); ++k) outside[k] = frustum.excludesBall(balls[k].centre, balls[k].radius);
   }
 
   void begin(const View& view, bool depth_test) {
@@ -274,8 +264,7 @@ void OffscreenRenderer::upload(std::span<const glm::dvec3> vertices, std::span<c
   ids.reserve(vertices.size());
   s.fan_indices.clear();
   s.fan_start.assign(1, 0);
-  s.centres.assign(polygons.size(), glm::dvec3(0.0));
-  s.radii.assign(polygons.size(), 0.0);  // polygons with no valid vertices have no triangles to draw
+  s.balls.assign(polygons.size(), Ball{});  // polygons with no valid vertices have no triangles to draw
   for (size_t k = 0; k < polygons.size(); ++k) {
     const Polygon& p = polygons[k];
     const bool valid = p.vertex_count >= 3 && p.first_vertex <= vertices.size() &&
@@ -293,11 +282,7 @@ void OffscreenRenderer::upload(std::span<const glm::dvec3> vertices, std::span<c
       }
     }
     s.fan_start.push_back(static_cast<uint32_t>(s.fan_indices.size()));
-    if (valid) {
-      const Ball ball = polygonBall(vertices, p);
-      s.centres[k] = ball.centre;
-      s.radii[k] = ball.radius;
-    }
+    if (valid) s.balls[k] = polygonBall(vertices, p);
   }
   s.vertices = std::move(own_vertices);
   s.positions_valid = false;

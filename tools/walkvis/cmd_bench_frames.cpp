@@ -1,23 +1,25 @@
-// walkvis bench frames SCENE|FILE: the same tour rendered offscreen (OSMesa, llvmpipe) in one run by
-// the z-buffer baseline (all fragments, depth test and GL back-face culling on), painter's BSP
-// (back faces skipped in the traversal), painter's PFD (trees of a PFD tree file, or built in memory
-// for a scene), and painter's HFD with each backface method (an HFD tree file: the source or --hfd).
-// Every mode leaves out the fragments wholly outside the view frustum (FrameBuilder; not with
-// --no-frustum-culling). Per mode: median frame time (order + draw + glFinish), median polygons drawn, speedup over the
-// z-buffer, and the fraction of the ideal it reaches. Two reference runs frame every mode's time:
-// the floor (the same frames with nothing drawn: clear, the eye-relative vertex upload, glFinish),
-// and the ideal (drawing exactly the fragments the z-buffer frame shows, in BSP order, with no
-// order cost: what a perfect visibility method would draw). ideal_fraction = ideal time / mode
-// time, so 1 means the mode is as fast as drawing only what is seen; ideal_fraction_paired is the
-// median over frames of that ratio frame by frame, and its halves the same from the even and the
-// odd rounds alone, whose distance tells its noise. Every mode, the floor and the
-// ideal run the whole tour once per round, rounds in rotated order, and the medians are over all
-// rounds; frame_ms_round_spread (the range of the rounds' medians over their median) tells how far
-// the noise reaches, to compare with the differences between modes. Order check: on every --check-every'th frame the painter's ids image is compared with
-// the z-buffer's (24-bit depth, GL culling on) pixel by pixel; both rasterise the same triangles from
-// the same float positions, so a differing pixel is an order error or a depth tie of the z-buffer
-// itself. The exact ray-cast comparison is `walkvis validate`.
+// walkvis bench frames SCENE|FILE: the same tour rendered offscreen (OSMesa, llvmpipe) in one run
+// by the z-buffer baseline (all fragments, depth test and GL back-face culling on), painter's BSP
+// (back faces skipped in the traversal), painter's PFD (trees of a PFD tree file, or built in
+// memory for a scene), and painter's HFD with each backface method (an HFD tree file: the source or
+// --hfd). Every mode leaves out the fragments wholly outside the view frustum (FrameBuilder; not
+// with --no-frustum-culling). Per mode: median frame time (order + draw + glFinish), median
+// polygons drawn, speedup over the z-buffer, and the fraction of the ideal it reaches. Two
+// reference runs frame every mode's time: the floor (the same frames with nothing drawn: clear, the
+// eye-relative vertex upload, glFinish), and the ideal (drawing exactly the fragments the z-buffer
+// frame shows, in BSP order, with no order cost: what a perfect visibility method would draw).
+// ideal_fraction = ideal time / mode time, so 1 means the mode is as fast as drawing only what is
+// seen; ideal_fraction_paired is the median over frames of that ratio frame by frame, and its
+// halves the same from the even and the odd rounds alone, whose distance tells its noise. Every
+// mode, the floor and the ideal run the whole tour once per round, rounds in rotated order, and the
+// medians are over all rounds; frame_ms_round_spread (the range of the rounds' medians over their
+// median) tells how far the noise reaches, to compare with the differences between modes. Order
+// check: on every --check-every'th frame the painter's ids image is compared with the z-buffer's
+// (24-bit depth, GL culling on) pixel by pixel; both rasterise the same triangles from the same
+// float positions, so a differing pixel is an order error or a depth tie of the z-buffer itself.
+// The exact ray-cast comparison is `walkvis validate`.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -52,27 +54,35 @@ double medianOf(std::vector<double> v) {
   return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
-// Per frame of the tour, the median of its times over the rounds whose index r has r % step ==
-// first (step 1: all rounds). frame_ms holds round after round, `frames` times each.
-std::vector<double> perFrameMedians(const std::vector<double>& frame_ms, size_t frames, uint32_t first, uint32_t step) {
+// Some of a run's rounds: those whose index r has r % step == first.
+struct RoundSet {
+  uint32_t first = 0, step = 1;
+};
+// All rounds, then the even and the odd ones alone (all rounds for both when there is one).
+std::array<RoundSet, 3> roundSets(uint32_t rounds) {
+  if (rounds < 2) return {RoundSet{0, 1}, RoundSet{0, 1}, RoundSet{0, 1}};
+  return {RoundSet{0, 1}, RoundSet{0, 2}, RoundSet{1, 2}};
+}
+
+// Per frame of the tour, the median of its times over the rounds of `set`. frame_ms holds round
+// after round, `frames` times each.
+std::vector<double> perFrameMedians(const std::vector<double>& frame_ms, size_t frames, RoundSet set) {
   std::vector<double> medians(frames), times;
   for (size_t k = 0; k < frames; ++k) {
     times.clear();
-    for (size_t r = first; (r + 1) * frames <= frame_ms.size(); r += step) times.push_back(frame_ms[r * frames + k]);
+    for (size_t r = set.first; (r + 1) * frames <= frame_ms.size(); r += set.step)
+      times.push_back(frame_ms[r * frames + k]);
     medians[k] = medianOf(times);
   }
   return medians;
 }
 
-// The median over the frames of the ideal's time over the mode's, each frame's times the median of
-// its rounds (those picked by first and step): a paired figure, so that a frame dear for every
-// mode (a wide view of big walls) weighs the same in both.
-double pairedIdealFraction(const std::vector<double>& ideal_ms, const std::vector<double>& mode_ms, size_t frames,
-                           uint32_t first, uint32_t step) {
-  const std::vector<double> ideal = perFrameMedians(ideal_ms, frames, first, step);
-  const std::vector<double> mode = perFrameMedians(mode_ms, frames, first, step);
+// The median over the frames of the ideal's time over the mode's, both per-frame medians of the
+// same rounds: a paired figure, so that a frame dear for every mode (a wide view of big walls)
+// weighs the same in both.
+double pairedIdealFraction(const std::vector<double>& ideal, const std::vector<double>& mode) {
   std::vector<double> ratios;
-  for (size_t k = 0; k < frames; ++k)
+  for (size_t k = 0; k < mode.size(); ++k)
     if (mode[k] > 0.0) ratios.push_back(ideal[k] / mode[k]);
   return medianOf(ratios);
 }
@@ -105,9 +115,9 @@ int runFramesBench(const FramesBenchArgs& args) {
   base.build_pfd = true;
   base.cull = ListCullMethod::kRegion;
   base.objects = parseObjectSet(args.objects);
+  base.frustum_culling = args.frustum_culling;
   std::vector<std::unique_ptr<World>> worlds;
   worlds.push_back(std::make_unique<World>(openWorld(args.source, base, progress)));
-  worlds.back()->frustum_culling = args.frustum_culling;
   const World& main = *worlds.back();
   // The z-buffer world: the same scene and BSP, no trees, no list culler.
   auto zworld = std::make_unique<World>();
@@ -138,7 +148,6 @@ int runFramesBench(const FramesBenchArgs& args) {
       if (worlds.back()->trees.bsp.fragments.size() != main.trees.bsp.fragments.size())
         throw Error(hfd_file + ": its BSP differs from the source's");
       worlds.back()->objects = main.objects;  // the same objects whatever the tree file's spec
-      worlds.back()->frustum_culling = main.frustum_culling;
       runs.push_back({"hfd+" + std::string(listCullMethodName(m)), OrderMode::kHfd, worlds.back().get()});
     }
   }
@@ -247,6 +256,12 @@ int runFramesBench(const FramesBenchArgs& args) {
   if (!args.json)
     std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %8s %9s %7s %7s %11s\n", "mode", "frame_ms", "order_ms",
                 "draw_ms", "drawn", "listed", "tests", "culled", "outside", "speedup", "ideal", "spread", "diff_pixels");
+  // The ideal's per-frame medians over all rounds, the even and the odd ones, for the paired
+  // figures of every mode.
+  const size_t frames = path.keys.size();
+  const std::array<RoundSet, 3> sets = roundSets(rounds);
+  std::array<std::vector<double>, 3> ideal_frames;
+  for (size_t h = 0; h < sets.size(); ++h) ideal_frames[h] = perFrameMedians(samples[ideal_run].frame_ms, frames, sets[h]);
   for (size_t i = 0; i < runs.size(); ++i) {
     const ModeRun& run = runs[i];
     const ModeSamples& m = samples[i];
@@ -262,13 +277,11 @@ int runFramesBench(const FramesBenchArgs& args) {
     const double med = medianOf(m.frame_ms);
     const double speedup = med > 0.0 ? zbuffer_ms / med : 0.0;
     const double ideal_fraction = med > 0.0 ? ideal_ms / med : 0.0;
-    const size_t frames = path.keys.size();
-    const std::vector<double>& ideal_samples = samples[ideal_run].frame_ms;
-    const double paired = pairedIdealFraction(ideal_samples, m.frame_ms, frames, 0, 1);
-    // The same figure from the even and from the odd rounds alone: how far apart they fall tells
-    // the noise of the paired figure (with one round, both are that round's).
-    const double paired_even = pairedIdealFraction(ideal_samples, m.frame_ms, frames, 0, rounds > 1 ? 2 : 1);
-    const double paired_odd = pairedIdealFraction(ideal_samples, m.frame_ms, frames, rounds > 1 ? 1 : 0, rounds > 1 ? 2 : 1);
+    // All rounds, then the even and the odd ones alone: how far apart those two fall tells the
+    // noise of the paired figure.
+    std::array<double, 3> paired{};
+    for (size_t h = 0; h < sets.size(); ++h)
+      paired[h] = pairedIdealFraction(ideal_frames[h], perFrameMedians(m.frame_ms, frames, sets[h]));
     const auto [lo, hi] = std::minmax_element(m.round_medians.begin(), m.round_medians.end());
     const double spread = med > 0.0 ? (*hi - *lo) / med : 0.0;
     rows.push_back({{"mode", run.name},
@@ -284,15 +297,15 @@ int runFramesBench(const FramesBenchArgs& args) {
                     {"object_triangles_median", medianOf(m.object_triangles)},
                     {"speedup_vs_zbuffer", speedup},
                     {"ideal_fraction", ideal_fraction},
-                    {"ideal_fraction_paired", paired},
-                    {"ideal_fraction_paired_halves", {paired_even, paired_odd}},
+                    {"ideal_fraction_paired", paired[0]},
+                    {"ideal_fraction_paired_halves", {paired[1], paired[2]}},
                     {"bsp_fallback_frames", m.bsp_fallbacks},
                     {"pixels_differing_from_zbuffer", diff_pixels}});
     if (!args.json)
       std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %8.0f %9.2f %6.0f%% %6.1f%% %11llu\n",
                   run.name.c_str(), med, medianOf(m.order_ms), medianOf(m.draw_ms), medianOf(m.drawn),
-                  medianOf(m.listed), medianOf(m.tests), medianOf(m.culled), medianOf(m.outside), speedup, 100.0 * ideal_fraction, 100.0 * spread,
-                  static_cast<unsigned long long>(diff_pixels));
+                  medianOf(m.listed), medianOf(m.tests), medianOf(m.culled), medianOf(m.outside), speedup,
+                  100.0 * ideal_fraction, 100.0 * spread, static_cast<unsigned long long>(diff_pixels));
   }
   out["modes"] = rows;
   if (args.json) {

@@ -262,12 +262,7 @@ int runReport(const ReportArgs& args) {
         rows.push_back(row(v, m));
         points.push_back({m.value("ns_per_polygon", 0.0), m.value("effectiveness", 0.0), Rgb{30, 30, 200}, v});
       }
-      double xmax = 0.0;
-      for (const PlotPoint& q : points) xmax = std::max(xmax, q.x);
-      Canvas cv(640, 440);
-      drawPanel(cv, points, 60, 620, 20, 400, PlotAxis{0.0, xmax > 0.0 ? xmax * 1.1 : 1.0, false, "ns"},
-                PlotAxis{0.0, 1.0, false, ""});
-      cv.write((dir / png).string());
+      writeScatterPlot((dir / png).string(), points, "ns", PlotAxis{0.0, 1.0, false, ""});
     };
     sweep("normal-mask resolution", "mask", "--mask-n", kMaskCells, mask_rows, "mask-sweep.png");
     sweep("Johannsen-Carter T/R", "cluster", "--tr", kClusterTr, tr_rows, "cluster-sweep.png");
@@ -340,7 +335,8 @@ int runReport(const ReportArgs& args) {
     for (const auto& [bits, z] : vbsp["zbuffer"].items())
       rows.push_back({bits, z.value("depth_format", ""), std::to_string(z.value("order_error_pixels", 0)),
                       std::to_string(z.value("missed_pixels", 0)), std::to_string(z.value("tie_pixels", 0)),
-                      std::to_string(z.value("edge_pixels", 0)), fmt(1e3 * z.value("render_seconds", 0.0) / images, 3)});
+                      std::to_string(z.value("edge_pixels", 0)),
+                      fmt(1e3 * z.value("render_seconds", 0.0) / images, 3)});
   page.p("The z-buffer against the same exact images, per depth precision:");
   page.table({"bits", "format", "errors", "missed", "ties", "edge", "ms per image"}, rows);
   if (vbsp.contains("zbuffer") && !vbsp["zbuffer"].empty()) {
@@ -349,19 +345,16 @@ int runReport(const ReportArgs& args) {
     // labelled with its bits.
     const double exact = std::max(1.0, static_cast<double>(vbsp.value("exact_pixels", 0)));
     std::vector<PlotPoint> points;
-    double xmax = 0.0, lowest = 1.0 / exact, highest = 0.0;
+    double highest = 0.0;
     for (const auto& [bits, z] : vbsp["zbuffer"].items()) {
       const double ratio = z.value("order_error_pixels", 0) / exact;
       points.push_back({1e3 * z.value("render_seconds", 0.0) / images, ratio, Rgb{200, 30, 30}, bits});
-      xmax = std::max(xmax, points.back().x);
-      if (ratio > 0.0) lowest = std::min(lowest, ratio);
       highest = std::max(highest, ratio);
     }
-    Canvas cv(640, 440);
-    drawPanel(cv, points, 60, 620, 20, 400, PlotAxis{0.0, xmax > 0.0 ? xmax * 1.1 : 1.0, false, "ms"},
-              PlotAxis{std::floor(std::log10(lowest)), highest > 0.0 ? std::ceil(std::log10(highest)) : 0.0,
-                       true, ""});
-    cv.write((dir / "zbuffer-bits.png").string());
+    // One pixel in error is the least share there is, 1 / exact; the axis spans a decade at least.
+    const double lo = std::floor(std::log10(1.0 / exact));
+    const double hi = std::max(lo + 1.0, highest > 0.0 ? std::ceil(std::log10(highest)) : 0.0);
+    writeScatterPlot((dir / "zbuffer-bits.png").string(), points, "ms", PlotAxis{lo, hi, true, ""});
     page.img("zbuffer-bits.png",
              "Depth precision: milliseconds per image (drawing and reading back) across, the share of the exact "
              "pixels the z-buffer gets wrong up, per depth-buffer bits");

@@ -104,6 +104,15 @@ void drawPanel(Canvas& cv, std::span<const PlotPoint> points, int x0, int x1, in
   }
 }
 
+void writeScatterPlot(const std::string& path, std::span<const PlotPoint> points, const std::string& x_unit,
+                      const PlotAxis& y) {
+  double xmax = 0.0;
+  for (const PlotPoint& q : points) xmax = std::max(xmax, q.x);
+  Canvas cv(640, 440);
+  drawPanel(cv, points, 60, 620, 20, 400, PlotAxis{0.0, xmax > 0.0 ? xmax * 1.1 : 1.0, false, x_unit}, y);
+  cv.write(path);
+}
+
 void writeBarChart(const std::string& path, std::span<const double> values, uint32_t rgb) {
   constexpr int kW = 280, kH = 120, kPad = 8;
   Canvas cv(kW, kH);

@@ -40,6 +40,11 @@ struct PlotPoint {
 void drawPanel(Canvas& cv, std::span<const PlotPoint> points, int x0, int x1, int y_top, int y_bottom,
                const PlotAxis& x, const PlotAxis& y);
 
+// One panel on a 640 × 440 canvas written to `path` (PNG): x from 0 to a tenth past the largest
+// point's, in `x_unit`; y as given.
+void writeScatterPlot(const std::string& path, std::span<const PlotPoint> points, const std::string& x_unit,
+                      const PlotAxis& y);
+
 // A bar chart without text: one bar per value, heights against the largest, 280 × 120 pixels.
 void writeBarChart(const std::string& path, std::span<const double> values, uint32_t rgb);
 

@@ -90,7 +90,7 @@ TEST(FrameBuilder, FourModesDrawTheSameIdsImage) {
     for (OrderMode mode : {OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd}) {
       const FrameStats s = builder.build(world, camera, mode, draw);
       EXPECT_EQ(s.drawn, draw.size());
-      EXPECT_EQ(s.listed, s.drawn + s.culled + s.outside);
+      EXPECT_EQ(s.listed, s.drawn + s.culled + s.outside + s.occluded);
       if (mode != OrderMode::kBsp) {
         EXPECT_EQ(s.used, mode) << "the eye is on the height plane inside the region";
         EXPECT_EQ(s.level, 0);
@@ -119,6 +119,7 @@ TEST(FrameBuilder, FrustumCullingKeepsTheImage) {
   options.build_pfd = true;
   options.cull = ListCullMethod::kRegion;
   World world = openWorld("gen:office", options);
+  world.occlusion_culling = false;  // the frustum alone
   o.drawer.upload(world.trees.bsp, world.scene);
   FrameBuilder builder;
   std::vector<uint32_t> culled, all, culled_ids, all_ids;
@@ -155,6 +156,61 @@ TEST(FrameBuilder, FrustumCullingKeepsTheImage) {
   std::printf("%llu of %llu listed fragments outside the view\n", static_cast<unsigned long long>(outside),
               static_cast<unsigned long long>(listed));
   EXPECT_GT(outside, listed / 4) << "a 70-degree view leaves out much of what the order lists";
+}
+
+// Occlusion culling (World::occlusion_culling) leaves out only what the painter's order paints
+// over: in the painter's modes the ids image is bit-identical with and without it, the list is the
+// unoccluded list with some fragments taken out (order kept), and it takes out many; on the
+// furnished office and on a room grid, for cameras looking up and down, at two cell sizes.
+TEST(FrameBuilder, OcclusionCullingKeepsTheImage) {
+  Offscreen o = makeOffscreen();
+  WorldOptions options;
+  options.build_pfd = true;
+  options.cull = ListCullMethod::kRegion;
+  options.objects = ObjectSet::kNone;
+  uint64_t occluded = 0, drawn = 0, frames = 0;
+  for (const char* spec : {"gen:office?rooms=12&furniture=4", "gen:office?rooms=6"}) {
+    World world = openWorld(spec, options);
+    o.drawer.upload(world.trees.bsp, world.scene);
+    FrameBuilder builder;
+    std::vector<uint32_t> kept, all, kept_ids, all_ids;
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<double> pitch(-1.0, 1.0);
+    int k = 0;
+    for (FreeCamera camera : officeCameras(world, 10, 21)) {
+      camera.pitch = pitch(rng);
+      world.occlusion.cell_pixels = k++ % 2 ? 8 : 3;
+      for (OrderMode mode : {OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd}) {
+        DrawSettings settings;
+        settings.style = DrawStyle::kIds;
+        world.occlusion_culling = true;
+        const FrameStats s = builder.build(world, camera, mode, kept);
+        world.occlusion_culling = false;
+        const FrameStats u = builder.build(world, camera, mode, all);
+        EXPECT_EQ(u.occluded, 0u);
+        EXPECT_EQ(s.listed, u.listed);
+        EXPECT_EQ(s.drawn + s.occluded, u.drawn);
+        size_t at = 0;  // kept is a subsequence of all
+        for (uint32_t f : all)
+          if (at < kept.size() && kept[at] == f) ++at;
+        EXPECT_EQ(at, kept.size()) << orderModeName(mode);
+        occluded += s.occluded;
+        drawn += u.drawn;
+        ++frames;
+        o.drawer.draw(camera, kept, settings);
+        o.drawer.readIds(kW, kH, kept_ids);
+        o.drawer.draw(camera, all, settings);
+        o.drawer.readIds(kW, kH, all_ids);
+        size_t differing = 0;
+        for (size_t p = 0; p < all_ids.size(); ++p) differing += kept_ids[p] != all_ids[p];
+        EXPECT_EQ(differing, 0u) << spec << " " << orderModeName(mode) << " at yaw " << camera.yaw << ", pitch "
+                                 << camera.pitch;
+      }
+    }
+  }
+  std::printf("%llu of %llu fragments in view occluded over %llu frames\n", static_cast<unsigned long long>(occluded),
+              static_cast<unsigned long long>(drawn), static_cast<unsigned long long>(frames));
+  EXPECT_GT(occluded, drawn / 10) << "inside a room most of the building lies behind its walls";
 }
 
 // The normal mask culls from the view cone through the image's corners (list_cull.h): it may drop
@@ -285,6 +341,7 @@ TEST(BenchFrames, FloorAndIdealFrameEveryMode) {
   const nlohmann::json j = benchFramesJson(tree.string() + " --frames 8 --rounds 2 --check-every 2 --size 96x72", json);
   ASSERT_TRUE(j.is_object());
   EXPECT_EQ(j["rounds"], 2);
+  EXPECT_EQ(j["occlusion_culling"], true);
   const double floor_ms = j["floor_ms_median"], ideal_ms = j["ideal_ms_median"];
   EXPECT_GT(floor_ms, 0.0);
   EXPECT_GE(ideal_ms, 0.0);
@@ -313,6 +370,11 @@ TEST(BenchFrames, FloorAndIdealFrameEveryMode) {
       EXPECT_EQ(m["ideal_fraction_paired_halves"].size(), 2u) << mode;
     }
     EXPECT_GE(m["outside_median"].get<double>(), 0.0) << mode;
+    // Occlusion culling is the painter's modes' own: the baseline and the ideal draw what the
+    // frustum holds.
+    if (mode == "zbuffer" || mode == "ideal") {
+      EXPECT_EQ(m["occluded_median"], 0.0) << mode;
+    }
     if (mode != "zbuffer" && mode != "ideal") {
       EXPECT_LE(ideal_drawn, m["drawn_median"].get<double>()) << mode;
     }

@@ -168,8 +168,10 @@ nlohmann::json expectedAnswers(const std::string& tree, const std::string& scene
   options.scene = scene_spec;
   options.objects = ObjectSet::kNone;
   World world = openWorld(tree, options);
-  // The orders themselves: the viewer leaves what lies outside the view to WebGL's clipping.
+  // The orders themselves: the viewer leaves what lies outside the view to WebGL's clipping and
+  // what lies behind nearer fragments to the painter's order.
   world.frustum_culling = false;
+  world.occlusion_culling = false;
   const Walker walker(world.scene, world.trees.bsp);
   FrameBuilder builder;
   std::vector<uint32_t> draw;

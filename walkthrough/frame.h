@@ -25,6 +25,7 @@
 #include "scenes/scene.h"
 #include "walkthrough/camera.h"
 #include "walkthrough/mesh_object.h"
+#include "walkthrough/occlusion_buffer.h"
 
 namespace walkvis {
 
@@ -45,6 +46,8 @@ struct WorldOptions {
   // For a tree file the spec checked is `scene` when given.
   ObjectSet objects = ObjectSet::kAuto;
   bool frustum_culling = true;   // World::frustum_culling
+  bool occlusion_culling = true; // World::occlusion_culling
+  OcclusionOptions occlusion;
 };
 
 // Everything frames need, built once: the scene, its BSP, the trees when there are any (a tree
@@ -67,6 +70,12 @@ struct World {
   // setting up its triangles.
   std::vector<Ball> fragment_balls;
   bool frustum_culling = true;
+  // The painter's modes (bsp, pfd, hfd) then leave out what a few large fragments of the frame's
+  // own list hide from this eye (occlusion_buffer.h; FrameStats::occluded). The image stays the
+  // same: a painter's order paints over a hidden fragment wherever it would show. The z-buffer
+  // baseline draws what the frustum holds.
+  bool occlusion_culling = true;
+  OcclusionOptions occlusion;
   // The level whose height plane the eye is on (|eye.y − height| within 1e-9 of the height's scale:
   // camera paths store heights in decimal), if any: an index into trees.levels (and run_cullers).
   std::optional<uint32_t> levelAt(const glm::dvec3& eye) const;
@@ -82,7 +91,9 @@ struct FrameStats {
   uint32_t listed = 0;          // from the order source, before culling
   uint32_t culled = 0;          // by the backface method
   uint32_t outside = 0;         // of what the backface method kept: wholly outside the view frustum
-  uint32_t drawn = 0;           // listed - culled - outside
+  uint32_t occluded = 0;        // of the rest: hidden behind the frame's occluders (occlusion_buffer.h)
+  uint32_t occluders = 0;       // fragments that served as occluders
+  uint32_t drawn = 0;           // listed - culled - outside - occluded
   uint32_t tests = 0;           // plane tests (PFD/HFD: the path's and the detail objects'; BSP: nodes visited)
   double order_ms = 0.0;        // query + culling
   double draw_ms = 0.0;         // filled by the drawer's caller
@@ -109,6 +120,12 @@ class FrameBuilder {
   std::vector<uint32_t> scratch_;
   std::vector<uint8_t> keep_;          // per fragment, for culling a BSP order with a list culler
   std::vector<ObjectTriangles> objects_;
+  OcclusionBuffer occlusion_;
+  std::vector<std::pair<double, uint32_t>> candidates_;  // apparent size, fragment
+  std::vector<uint32_t> occluders_;
+  // Leaves out of `draw` (order kept) what the occlusion buffer hides; returns how many.
+  uint32_t cullOccluded(const World& world, const FreeCamera& camera, std::vector<uint32_t>& draw,
+                        FrameStats& stats);
 };
 
 }  // namespace walkvis

@@ -45,6 +45,8 @@ struct FramesBenchArgs {
   uint32_t rounds = 3;
   std::string objects = "auto";
   bool frustum_culling = true;
+  bool occlusion_culling = true;
+  OcclusionOptions occlusion;
   bool json = false;
 };
 
@@ -98,8 +100,8 @@ struct ModeRun {
 };
 
 struct ModeSamples {
-  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, outside, object_triangles,
-      round_medians;
+  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, outside, occluded, occluders,
+      object_triangles, round_medians;
   uint64_t bsp_fallbacks = 0;
 };
 
@@ -117,6 +119,8 @@ int runFramesBench(const FramesBenchArgs& args) {
   base.cull = ListCullMethod::kRegion;
   base.objects = parseObjectSet(args.objects);
   base.frustum_culling = args.frustum_culling;
+  base.occlusion_culling = args.occlusion_culling;
+  base.occlusion = args.occlusion;
   std::vector<std::unique_ptr<World>> worlds;
   worlds.push_back(std::make_unique<World>(openWorld(args.source, base, progress)));
   const World& main = *worlds.back();
@@ -129,6 +133,7 @@ int runFramesBench(const FramesBenchArgs& args) {
   zworld->objects = main.objects;
   zworld->fragment_balls = main.fragment_balls;
   zworld->frustum_culling = main.frustum_culling;
+  zworld->occlusion_culling = false;  // the baseline, and the ideal's list below: what the frustum holds
   worlds.push_back(std::move(zworld));
   const World& zbuffer_world = *worlds.back();
 
@@ -175,7 +180,7 @@ int runFramesBench(const FramesBenchArgs& args) {
     std::fill(shown.begin(), shown.end(), uint8_t{0});
     for (uint32_t id : ids)
       if (id < shown.size()) shown[id] = 1;
-    builder.build(main, camera, OrderMode::kBsp, draw, path.keys[k].time);
+    builder.build(zbuffer_world, camera, OrderMode::kBsp, draw, path.keys[k].time);
     for (uint32_t f : draw)
       if (f < shown.size() && shown[f]) ideal[k].push_back(f);
     if (k % every == 0) truth.push_back(ids);
@@ -196,7 +201,7 @@ int runFramesBench(const FramesBenchArgs& args) {
       // in every mode, so the ideal pays it too (object_ms).
       stats = builder.build(*run.world, camera, OrderMode::kBsp, draw, path.keys[k].time);
       stats.order_ms = 0.0;
-      stats.tests = stats.culled = stats.outside = 0;
+      stats.tests = stats.culled = stats.outside = stats.occluded = stats.occluders = 0;
     }
     const std::span<const uint32_t> list =
         run.kind == RunKind::kIdeal ? std::span<const uint32_t>(ideal[k]) : std::span<const uint32_t>();
@@ -230,6 +235,8 @@ int runFramesBench(const FramesBenchArgs& args) {
         m.tests.push_back(st.tests);
         m.culled.push_back(st.culled);
         m.outside.push_back(st.outside);
+        m.occluded.push_back(st.occluded);
+        m.occluders.push_back(st.occluders);
         if (r == 0 && runs[i].kind == RunKind::kMode && runs[i].mode != OrderMode::kZBuffer && st.used != runs[i].mode)
           ++m.bsp_fallbacks;
       }
@@ -249,6 +256,10 @@ int runFramesBench(const FramesBenchArgs& args) {
   out["checked_frames"] = truth.size();
   out["rounds"] = rounds;
   out["frustum_culling"] = main.frustum_culling;
+  out["occlusion_culling"] = main.occlusion_culling;
+  out["occlusion_cell_pixels"] = main.occlusion.cell_pixels;
+  out["max_occluders"] = main.occlusion.max_occluders;
+  out["occlusion_min_target_pixels"] = main.occlusion.min_target_pixels;
   const double zbuffer_ms = medianOf(samples[zbuffer_run].frame_ms);
   const double floor_ms = medianOf(samples[floor_run].frame_ms);
   const double ideal_ms = medianOf(samples[ideal_run].frame_ms);
@@ -258,8 +269,9 @@ int runFramesBench(const FramesBenchArgs& args) {
   out["ideal_speedup"] = ideal_ms > 0.0 ? zbuffer_ms / ideal_ms : 0.0;
   auto rows = nlohmann::ordered_json::array();
   if (!args.json)
-    std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %8s %9s %7s %7s %11s\n", "mode", "frame_ms", "order_ms",
-                "draw_ms", "drawn", "listed", "tests", "culled", "outside", "speedup", "ideal", "spread", "diff_pixels");
+    std::printf("%-15s %9s %9s %9s %8s %8s %8s %8s %8s %8s %9s %7s %7s %11s\n", "mode", "frame_ms", "order_ms",
+                "draw_ms", "drawn", "listed", "tests", "culled", "outside", "occluded", "speedup", "ideal", "spread",
+                "diff_pixels");
   // The ideal's per-frame medians over all rounds, the even and the odd ones, for the paired
   // figures of every mode.
   const size_t frames = path.keys.size();
@@ -298,6 +310,8 @@ int runFramesBench(const FramesBenchArgs& args) {
                     {"tests_median", medianOf(m.tests)},
                     {"culled_median", medianOf(m.culled)},
                     {"outside_median", medianOf(m.outside)},
+                    {"occluded_median", medianOf(m.occluded)},
+                    {"occluders_median", medianOf(m.occluders)},
                     {"object_triangles_median", medianOf(m.object_triangles)},
                     {"speedup_vs_zbuffer", speedup},
                     {"ideal_fraction", ideal_fraction},
@@ -306,9 +320,10 @@ int runFramesBench(const FramesBenchArgs& args) {
                     {"bsp_fallback_frames", m.bsp_fallbacks},
                     {"pixels_differing_from_zbuffer", diff_pixels}});
     if (!args.json)
-      std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %8.0f %9.2f %6.0f%% %6.1f%% %11llu\n",
+      std::printf("%-15s %9.3f %9.3f %9.3f %8.0f %8.0f %8.0f %8.0f %8.0f %8.0f %9.2f %6.0f%% %6.1f%% %11llu\n",
                   run.name.c_str(), med, medianOf(m.order_ms), medianOf(m.draw_ms), medianOf(m.drawn),
-                  medianOf(m.listed), medianOf(m.tests), medianOf(m.culled), medianOf(m.outside), speedup,
+                  medianOf(m.listed), medianOf(m.tests), medianOf(m.culled), medianOf(m.outside),
+                  medianOf(m.occluded), speedup,
                   100.0 * ideal_fraction, 100.0 * spread, static_cast<unsigned long long>(diff_pixels));
   }
   out["modes"] = rows;
@@ -345,6 +360,18 @@ void addBenchFrames(CLI::App& bench, CommandRunner& runner) {
                   "Mesh objects: auto (the animated blob in gen:office) | none | blob (in the start room)");
   sub->add_flag("!--no-frustum-culling", args->frustum_culling,
                 "Give GL every listed fragment, also those wholly outside the view frustum (every mode)");
+  sub->add_flag("!--no-occlusion-culling", args->occlusion_culling,
+                "Painter's modes: keep the fragments that the frame's largest fragments hide from the eye");
+  sub->add_option("--occlusion-cell", args->occlusion.cell_pixels, "Occlusion culling: pixels per cell side")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  sub->add_option("--occluders", args->occlusion.max_occluders, "Occlusion culling: occluders per frame")
+      ->check(CLI::Range(0u, 4096u))
+      ->capture_default_str();
+  sub->add_option("--occlusion-min-pixels", args->occlusion.min_target_pixels,
+                  "Occlusion culling: test fragments whose ball looks at least this many pixels in radius")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sub->add_flag("--json", args->json, "Print JSON");
   sub->callback([args, &runner] { runner = [args] { return runFramesBench(*args); }; });
 }

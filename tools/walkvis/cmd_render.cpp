@@ -71,7 +71,7 @@ int runRender(const RenderArgs& args) {
   std::ofstream csv(csv_tmp);
   if (!csv) throw Error(csv_path + ": cannot open for writing");
   csv << "frame,time,x,y,z,yaw,pitch,frame_ms,order_ms,draw_ms,drawn,listed,tests,culled,used,level,object_ms,"
-         "object_triangles,object_triangles_computed,outside\n";
+         "object_triangles,object_triangles_computed,outside,occluded\n";
   FrameBuilder builder;
   std::vector<uint32_t> draw;
   std::vector<uint8_t> rgb;
@@ -89,11 +89,11 @@ int runRender(const RenderArgs& args) {
     std::snprintf(name, sizeof name, "frame_%05zu.png", k);
     writePngRgb((std::filesystem::path(args.out) / name).string(), size.width, size.height, rgb);
     char line[512];
-    std::snprintf(line, sizeof line, "%zu,%.6f,%.17g,%.17g,%.17g,%.17g,%.17g,%.4f,%.4f,%.4f,%u,%u,%u,%u,%s,%d,%.4f,%u,%llu,%u\n",
+    std::snprintf(line, sizeof line, "%zu,%.6f,%.17g,%.17g,%.17g,%.17g,%.17g,%.4f,%.4f,%.4f,%u,%u,%u,%u,%s,%d,%.4f,%u,%llu,%u,%u\n",
                   k, key.time, key.eye.x, key.eye.y, key.eye.z, key.yaw, key.pitch,
                   s.order_ms + s.object_ms + s.draw_ms, s.order_ms, s.draw_ms, s.drawn, s.listed, s.tests, s.culled,
                   std::string(orderModeName(s.used)).c_str(), s.level, s.object_ms, s.object_triangles,
-                  static_cast<unsigned long long>(s.object_triangles_computed), s.outside);
+                  static_cast<unsigned long long>(s.object_triangles_computed), s.outside, s.occluded);
     csv << line;
     if ((k + 1) % 20 == 0 || k + 1 == path.keys.size())
       std::fprintf(stderr, "  frame %zu/%zu\n", k + 1, path.keys.size());

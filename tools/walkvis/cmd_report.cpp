@@ -411,15 +411,18 @@ int runReport(const ReportArgs& args) {
     for (const auto& m : fj["modes"])
       rows.push_back({m.value("mode", ""), fmt(m.value("frame_ms_median", 0.0)),
                       pct(m.value("frame_ms_round_spread", 0.0)), fmt(m.value("drawn_median", 0.0), 0),
-                      fmt(m.value("outside_median", 0.0), 0), fmt(m.value("speedup_vs_zbuffer", 0.0), 2),
+                      fmt(m.value("outside_median", 0.0), 0), fmt(m.value("occluded_median", 0.0), 0),
+                      fmt(m.value("speedup_vs_zbuffer", 0.0), 2),
                       pct(m.value("ideal_fraction", 0.0)), pct(m.value("ideal_fraction_paired", 0.0))});
     page.p(std::to_string(fj.value("frames", 0)) + " frames of the automatic tour at " + fj.value("size", "") +
            " (OSMesa), " + std::to_string(fj.value("rounds", 0)) + " rounds. The floor draws nothing; the ideal " +
            "draws exactly what the z-buffer shows (" + fmt(fj.value("ideal_speedup", 0.0), 2) +
            "&times; the z-buffer's speed). Every mode leaves out the fragments wholly outside the view "
-           "(outside). Of the ideal: the ideal's median time over the mode's; paired: the median over "
+           "(outside), and the painter's modes what the frame's largest fragments hide from the eye "
+           "(occluded). Of the ideal: the ideal's median time over the mode's; paired: the median over "
            "frames of the same ratio frame by frame, the steadier figure.");
-    page.table({"mode", "frame ms", "round spread", "drawn", "outside", "speed-up", "of the ideal", "paired"}, rows);
+    page.table({"mode", "frame ms", "round spread", "drawn", "outside", "occluded", "speed-up", "of the ideal", "paired"},
+               rows);
   }
   page.h2("Speed against error");
   if (scene.empty()) {

@@ -150,6 +150,25 @@ void OcclusionBuffer::spanAt(double y, double y0, double y1, double& xl, double&
 }
 
 bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
+  if (corners.size() < 3) return false;
+  // First the cell under the image of the corners' mean, a point of the polygon: with nothing
+  // there nearer than that point, the polygon is not hidden (most that are seen end here). Where
+  // that cell is not one the full test would look at, answering no is merely cautious.
+  {
+    glm::dvec3 m(0.0);
+    for (const glm::dvec3& p : corners) m += p;
+    const glm::dvec3 c = m / static_cast<double>(corners.size()) - eye_;
+    const double w = glm::dot(c, frame_.forward);
+    if (w >= 0.5 * near_ && w <= far_) {
+      const double x = 0.5 * (glm::dot(c, frame_.right) / (w * tx_) + 1.0) * width_;
+      const double y = 0.5 * (glm::dot(c, frame_.up) / (w * ty_) + 1.0) * height_;
+      if (x >= 0.0 && y >= 0.0 && x < width_ && y < height_) {
+        const size_t cx = std::min(static_cast<size_t>(x) / static_cast<size_t>(cell_), static_cast<size_t>(cells_x_ - 1));
+        const size_t cy = std::min(static_cast<size_t>(y) / static_cast<size_t>(cell_), static_cast<size_t>(cells_y_ - 1));
+        if (!(depth_[cy * static_cast<size_t>(cells_x_) + cx] > 1.0 / w)) return false;
+      }
+    }
+  }
   // What GL can draw of the polygon lies beyond its near plane; half the near distance leaves a
   // margin for the float clip. Nothing there: kept all the same (the frustum test's business).
   if (corners.size() < 3 || !project(corners, 0.5 * near_, scratch_)) return false;

@@ -38,7 +38,7 @@ namespace walkvis {
 struct OcclusionOptions {
   // Pixels per cell side. Finer cells cover more near an occluder's edge and cost more per
   // occluder (the figures are in docs/frames/).
-  int cell_pixels = 4;
+  int cell_pixels = 8;
   // Occluders per frame: the fragments of the list with the largest apparent size (ball radius over
   // distance).
   uint32_t max_occluders = 16;

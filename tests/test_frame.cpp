@@ -44,6 +44,24 @@ std::vector<FreeCamera> officeCameras(const World& world, int count, uint64_t se
   return cameras;
 }
 
+// `kept` is `all` with some fragments taken out in the same order, and draws the same ids image.
+void expectKeptDrawsTheSame(Offscreen& o, const FreeCamera& camera, const DrawSettings& settings,
+                            const std::vector<uint32_t>& kept, const std::vector<uint32_t>& all,
+                            const std::string& what) {
+  size_t at = 0;
+  for (uint32_t f : all)
+    if (at < kept.size() && kept[at] == f) ++at;
+  EXPECT_EQ(at, kept.size()) << what << ": not a subsequence";
+  std::vector<uint32_t> kept_ids, all_ids;
+  o.drawer.draw(camera, kept, settings);
+  o.drawer.readIds(kW, kH, kept_ids);
+  o.drawer.draw(camera, all, settings);
+  o.drawer.readIds(kW, kH, all_ids);
+  size_t differing = 0;
+  for (size_t p = 0; p < all_ids.size(); ++p) differing += kept_ids[p] != all_ids[p];
+  EXPECT_EQ(differing, 0u) << what << " at yaw " << camera.yaw << ", pitch " << camera.pitch;
+}
+
 TEST(SceneDrawer, ReadbackIsNotBlank) {
   Offscreen o = makeOffscreen();
   const World& world = office();
@@ -122,7 +140,7 @@ TEST(FrameBuilder, FrustumCullingKeepsTheImage) {
   world.occlusion_culling = false;  // the frustum alone
   o.drawer.upload(world.trees.bsp, world.scene);
   FrameBuilder builder;
-  std::vector<uint32_t> culled, all, culled_ids, all_ids;
+  std::vector<uint32_t> culled, all;
   uint64_t outside = 0, listed = 0;
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> pitch(-1.2, 1.2);
@@ -140,17 +158,9 @@ TEST(FrameBuilder, FrustumCullingKeepsTheImage) {
       EXPECT_EQ(u.outside, 0u);
       EXPECT_EQ(s.listed, u.listed);
       EXPECT_EQ(s.drawn + s.outside, u.drawn);
-      size_t at = 0;  // culled is a subsequence of all: the kept fragments, in the same order
-      for (uint32_t f : all)
-        if (at < culled.size() && culled[at] == f) ++at;
-      EXPECT_EQ(at, culled.size()) << orderModeName(mode);
       outside += s.outside;
       listed += s.listed;
-      o.drawer.draw(camera, culled, settings);
-      o.drawer.readIds(kW, kH, culled_ids);
-      o.drawer.draw(camera, all, settings);
-      o.drawer.readIds(kW, kH, all_ids);
-      EXPECT_TRUE(culled_ids == all_ids) << orderModeName(mode) << " at yaw " << camera.yaw << ", pitch " << camera.pitch;
+      expectKeptDrawsTheSame(o, camera, settings, culled, all, std::string(orderModeName(mode)));
     }
   }
   std::printf("%llu of %llu listed fragments outside the view\n", static_cast<unsigned long long>(outside),
@@ -173,7 +183,7 @@ TEST(FrameBuilder, OcclusionCullingKeepsTheImage) {
     World world = openWorld(spec, options);
     o.drawer.upload(world.trees.bsp, world.scene);
     FrameBuilder builder;
-    std::vector<uint32_t> kept, all, kept_ids, all_ids;
+    std::vector<uint32_t> kept, all;
     std::mt19937_64 rng(13);
     std::uniform_real_distribution<double> pitch(-1.0, 1.0);
     int k = 0;
@@ -190,21 +200,10 @@ TEST(FrameBuilder, OcclusionCullingKeepsTheImage) {
         EXPECT_EQ(u.occluded, 0u);
         EXPECT_EQ(s.listed, u.listed);
         EXPECT_EQ(s.drawn + s.occluded, u.drawn);
-        size_t at = 0;  // kept is a subsequence of all
-        for (uint32_t f : all)
-          if (at < kept.size() && kept[at] == f) ++at;
-        EXPECT_EQ(at, kept.size()) << orderModeName(mode);
         occluded += s.occluded;
         drawn += u.drawn;
         ++frames;
-        o.drawer.draw(camera, kept, settings);
-        o.drawer.readIds(kW, kH, kept_ids);
-        o.drawer.draw(camera, all, settings);
-        o.drawer.readIds(kW, kH, all_ids);
-        size_t differing = 0;
-        for (size_t p = 0; p < all_ids.size(); ++p) differing += kept_ids[p] != all_ids[p];
-        EXPECT_EQ(differing, 0u) << spec << " " << orderModeName(mode) << " at yaw " << camera.yaw << ", pitch "
-                                 << camera.pitch;
+        expectKeptDrawsTheSame(o, camera, settings, kept, all, std::string(spec) + " " + std::string(orderModeName(mode)));
       }
     }
   }

@@ -1,6 +1,6 @@
 // What occlusion culling of a frame costs on the CPU (walkthrough/occlusion_buffer.h;
 // docs/DESIGN.md, "Occlusion culling of a frame"): FrameBuilder::build over the automatic tour of a
-// scene, with the occlusion buffer and without it, for each cell size. The PFD trees are built in
+// scene, without the occlusion buffer (cell:0) and with it at cells of 4, 8 and 16 pixels. The PFD trees are built in
 // memory, so the lists are those of the exact priority order. Counters: occluded and drawn per
 // frame. Its price in a whole frame, against what GL then does not draw, is `walkvis bench frames`
 // (docs/frames/).

@@ -100,9 +100,11 @@ TEST(OcclusionBuffer, AWallHidesItsFarSideOnly) {
   EXPECT_TRUE(buffer.hides(rect({0, 0, -20}, x, y, 300, 300))) << "beyond the image's edges";
   EXPECT_FALSE(buffer.hides(rect({0, 0, -2}, x, y, 0.5, 0.5))) << "in front of the wall";
   EXPECT_FALSE(buffer.hides(rect({0, 0, -4.6}, x, y, 3, 3))) << "through the wall on its near side";
-  // Crossing the near plane: what lies beyond it is behind the wall.
-  EXPECT_TRUE(buffer.hides(Quad{{-1, 0, 1}, {1, 0, 1}, {1, 0.5, -30}, {-1, 0.5, -30}}) ==
-              (pixelsShowing(c, Quad{{-1, 0, 1}, {1, 0, 1}, {1, 0.5, -30}, {-1, 0.5, -30}}, {wall}) == 0));
+  // Crossing the near plane, from behind the eye to beyond the wall: its part in front of the wall
+  // shows, and it is kept.
+  const Quad strip = {{-1, -0.5, 1}, {1, -0.5, 1}, {1, -0.5, -30}, {-1, -0.5, -30}};
+  EXPECT_GT(pixelsShowing(c, strip, {wall}), 0);
+  EXPECT_FALSE(buffer.hides(strip));
 
   // A narrower wall: a target seen past its edge is kept, one wholly behind it hidden.
   buffer.reset(c, 4);

@@ -244,7 +244,7 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
     stats.outside = static_cast<uint32_t>(draw.end() - kept);
     draw.erase(kept, draw.end());
   }
-  if (world.occlusion_culling && mode != OrderMode::kZBuffer) stats.occluded = cullOccluded(world, camera, draw, stats);
+  if (world.occlusion_culling && mode != OrderMode::kZBuffer) cullOccluded(world, camera, draw, stats);
   stats.drawn = static_cast<uint32_t>(draw.size());
   // FrameStats' rule: what was listed is drawn, culled, outside or occluded.
   WALKVIS_DCHECK(stats.listed == stats.drawn + stats.culled + stats.outside + stats.occluded);
@@ -260,13 +260,19 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
   return stats;
 }
 
-uint32_t FrameBuilder::cullOccluded(const World& world, const FreeCamera& camera, std::vector<uint32_t>& draw,
-                                    FrameStats& stats) {
+void FrameBuilder::cullOccluded(const World& world, const FreeCamera& camera, std::vector<uint32_t>& draw,
+                                FrameStats& stats) {
   const BspTree& bsp = world.trees.bsp;
   WALKVIS_DCHECK(world.fragment_balls.size() == bsp.fragments.size());  // World's rule: a ball per fragment
   auto corners = [&](uint32_t f) {
     const Polygon& p = bsp.fragments[f];
     return std::span<const glm::dvec3>(bsp.vertices).subspan(p.first_vertex, p.vertex_count);
+  };
+  // How large a fragment looks: (ball radius / distance to its centre)².
+  auto apparent = [&](uint32_t f) {
+    const Ball& b = world.fragment_balls[f];
+    const glm::dvec3 d = b.centre - camera.eye;
+    return b.radius * b.radius / std::max(glm::dot(d, d), 1e-300);
   };
   // The occluders: the largest fragments as seen from the eye (ball radius over distance), from
   // the list itself, so that each is drawn, and facing the eye, so that a drawer culling back
@@ -275,33 +281,26 @@ uint32_t FrameBuilder::cullOccluded(const World& world, const FreeCamera& camera
   candidates_.clear();
   for (uint32_t f : draw) {
     const Polygon& p = bsp.fragments[f];
-    if (!(glm::dot(p.plane.n, camera.eye) - p.plane.d > 0.0)) continue;
-    const Ball& b = world.fragment_balls[f];
-    const glm::dvec3 d = b.centre - camera.eye;
-    candidates_.push_back({b.radius * b.radius / std::max(glm::dot(d, d), 1e-300), f});
+    if (glm::dot(p.plane.n, camera.eye) - p.plane.d > 0.0) candidates_.push_back({apparent(f), f});
   }
   const size_t k = std::min<size_t>(world.occlusion.max_occluders, candidates_.size());
   std::partial_sort(candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(k), candidates_.end(),
                     [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
   occlusion_.reset(camera, world.occlusion.cell_pixels);
-  occluders_.clear();
-  for (size_t i = 0; i < k; ++i)
-    if (occlusion_.addOccluder(corners(candidates_[i].second))) occluders_.push_back(candidates_[i].second);
-  stats.occluders = static_cast<uint32_t>(occluders_.size());
-  if (occlusion_.coveredCells() == 0) return 0;
+  stats.occluders = 0;
+  for (size_t i = 0; i < k; ++i) stats.occluders += occlusion_.addOccluder(corners(candidates_[i].second));
+  stats.occluded = 0;
+  if (stats.occluders == 0) return;  // no cell covered: nothing can be hidden
   // Occluders are tested too: the one that gives a cell its depth is never hidden there (its
   // nearest point is at least as near as its farthest over the cell), so what it hides stays hidden.
   // Only fragments that look large are tested: a small one costs GL less to draw than the test.
   const double pixels_per_unit = 0.5 * camera.height / std::tan(0.5 * camera.fov_y);
   const double min_ratio = world.occlusion.min_target_pixels / pixels_per_unit;
   const auto kept = std::remove_if(draw.begin(), draw.end(), [&](uint32_t f) {
-    const Ball& b = world.fragment_balls[f];
-    const glm::dvec3 d = b.centre - camera.eye;
-    return b.radius * b.radius >= min_ratio * min_ratio * glm::dot(d, d) && occlusion_.hides(corners(f));
+    return apparent(f) >= min_ratio * min_ratio && occlusion_.hides(corners(f));
   });
-  const uint32_t occluded = static_cast<uint32_t>(draw.end() - kept);
+  stats.occluded = static_cast<uint32_t>(draw.end() - kept);
   draw.erase(kept, draw.end());
-  return occluded;
 }
 
 }  // namespace walkvis

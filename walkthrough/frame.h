@@ -92,7 +92,7 @@ struct FrameStats {
   uint32_t culled = 0;          // by the backface method
   uint32_t outside = 0;         // of what the backface method kept: wholly outside the view frustum
   uint32_t occluded = 0;        // of the rest: hidden behind the frame's occluders (occlusion_buffer.h)
-  uint32_t occluders = 0;       // fragments that served as occluders
+  uint32_t occluders = 0;       // fragments that covered some cell of the occlusion buffer
   uint32_t drawn = 0;           // listed - culled - outside - occluded
   uint32_t tests = 0;           // plane tests (PFD/HFD: the path's and the detail objects'; BSP: nodes visited)
   double order_ms = 0.0;        // query + culling
@@ -122,10 +122,8 @@ class FrameBuilder {
   std::vector<ObjectTriangles> objects_;
   OcclusionBuffer occlusion_;
   std::vector<std::pair<double, uint32_t>> candidates_;  // apparent size, fragment
-  std::vector<uint32_t> occluders_;
-  // Leaves out of `draw` (order kept) what the occlusion buffer hides; returns how many.
-  uint32_t cullOccluded(const World& world, const FreeCamera& camera, std::vector<uint32_t>& draw,
-                        FrameStats& stats);
+  // Leaves out of `draw` (order kept) what the occlusion buffer hides: stats.occluded, occluders.
+  void cullOccluded(const World& world, const FreeCamera& camera, std::vector<uint32_t>& draw, FrameStats& stats);
 };
 
 }  // namespace walkvis

@@ -21,6 +21,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // these image sizes, and llvmpipe snaps them to 1/256 pixel. Twelve times the snap.
 constexpr double kTargetSlackPixels = 0.05;
 
+// ceil(v) or floor(v) clamped to [lo, hi] before it becomes an int: an image point of a corner
+// just beyond the near plane can lie far outside the image, and an empty span is ±infinity.
+int ceilIn(double v, int lo, int hi) { return static_cast<int>(std::clamp(std::ceil(v), double(lo), double(hi))); }
+int floorIn(double v, int lo, int hi) { return static_cast<int>(std::clamp(std::floor(v), double(lo), double(hi))); }
+
 }  // namespace
 
 void OcclusionBuffer::reset(const FreeCamera& camera, int cell_pixels) {
@@ -90,19 +95,20 @@ bool OcclusionBuffer::addOccluder(std::span<const glm::dvec3> corners) {
     y1 = std::max(y1, q.y);
   }
   if (!(y1 - y0 > 1e-9)) return false;  // edge-on: covers no cell
-  auto span = [&](double y, double& xl, double& xr) { spanAt(y, y0, y1, xl, xr); };
-  const int gy0 = std::max(0, static_cast<int>(std::ceil(y0 / cell_)));
-  const int gy1 = std::min(cells_y_, static_cast<int>(std::floor(y1 / cell_)));
+  const int gy0 = ceilIn(y0 / cell_, 0, cells_y_);
+  const int gy1 = floorIn(y1 / cell_, 0, cells_y_);
+  size_t marked = 0;
   double lo_l = 0.0, lo_r = 0.0;
-  span(static_cast<double>(gy0 * cell_), lo_l, lo_r);
+  spanAt(static_cast<double>(gy0 * cell_), y0, y1, lo_l, lo_r);
   for (int gy = gy0; gy < gy1; ++gy) {
     double hi_l = 0.0, hi_r = 0.0;
-    span(static_cast<double>((gy + 1) * cell_), hi_l, hi_r);
+    spanAt(static_cast<double>((gy + 1) * cell_), y0, y1, hi_l, hi_r);
     // A cell is covered when its four corners are: both rows' spans hold its sides. On a span's
     // end counts as inside: a pixel centre of the cell is half a pixel from its sides.
     const double xl = std::max(lo_l, hi_l), xr = std::min(lo_r, hi_r);
-    const int cx0 = std::max(0, static_cast<int>(std::ceil(xl / cell_)));
-    const int cx1 = std::min(cells_x_, static_cast<int>(std::floor(xr / cell_)));
+    const int cx0 = ceilIn(xl / cell_, 0, cells_x_);
+    const int cx1 = floorIn(xr / cell_, 0, cells_x_);
+    if (cx0 < cx1) marked += static_cast<size_t>(cx1 - cx0);
     const double cy_lo = static_cast<double>(gy * cell_), cy_hi = static_cast<double>((gy + 1) * cell_);
     const double ey = e * (e < 0.0 ? cy_hi : cy_lo);
     double* row = depth_.data() + static_cast<size_t>(gy) * static_cast<size_t>(cells_x_);
@@ -114,7 +120,7 @@ bool OcclusionBuffer::addOccluder(std::span<const glm::dvec3> corners) {
     lo_l = hi_l;
     lo_r = hi_r;
   }
-  return true;
+  return marked > 0;
 }
 
 bool OcclusionBuffer::inverseDepthPlane(std::span<const glm::dvec3> corners, double& a, double& b, double& e) const {
@@ -188,8 +194,8 @@ bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
   // polygon: row by row, the polygon's extent over the row's strip (its spans at the strip's edges
   // and its corners inside the strip; convex), grown by the slack.
   const double s = kTargetSlackPixels;
-  const int j0 = std::max(0, static_cast<int>(std::ceil(y0 - s - 0.5)));
-  const int j1 = std::min(height_ - 1, static_cast<int>(std::floor(y1 + s - 0.5)));
+  const int j0 = ceilIn(y0 - s - 0.5, 0, height_);
+  const int j1 = floorIn(y1 + s - 0.5, -1, height_ - 1);
   // No pixel centre near it: GL draws none of it, but that is not being hidden (it is outside the
   // image, or too small to reach a pixel), so the answer is no.
   if (j1 < j0) return false;
@@ -212,8 +218,8 @@ bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
         xr = std::max(xr, q.x);
       }
     if (!(xl <= xr)) continue;  // cannot happen for ya <= yb; kept out all the same
-    const int i0 = std::max(0, static_cast<int>(std::ceil(xl - s - 0.5)));
-    const int i1 = std::min(width_ - 1, static_cast<int>(std::floor(xr + s - 0.5)));
+    const int i0 = ceilIn(xl - s - 0.5, 0, width_);
+    const int i1 = floorIn(xr + s - 0.5, -1, width_ - 1);
     if (i1 < i0) continue;
     any = true;
     const double* row = depth_.data() + static_cast<size_t>(cy) * static_cast<size_t>(cells_x_);

@@ -50,9 +50,8 @@ class OcclusionBuffer {
  public:
   // Empty buffer for this camera (its image size and frustum); keeps its memory between frames.
   void reset(const FreeCamera& camera, int cell_pixels);
-  // Marks the cells the convex planar polygon covers wholly. False, marking nothing, when it cannot
-  // serve: nothing of it beyond twice the near distance, a corner beyond the far plane, or seen
-  // edge-on.
+  // Marks the cells the convex planar polygon covers wholly; false when it covers none (nothing of
+  // it beyond twice the near distance, a corner beyond the far plane, seen edge-on, or too small).
   bool addOccluder(std::span<const glm::dvec3> corners);
   // See the contract above; false for a polygon wholly nearer than half the near distance or with
   // a corner beyond the far plane.

@@ -1,12 +1,15 @@
-// The view frustum's ball test (camera.h) against brute force: a ball it excludes holds no point
-// that the camera's perspective puts inside its image and depth range, whatever the camera; a ball
-// whose centre is inside is never excluded; and on random balls it excludes many.
+// The view frustum's ball and polygon tests (camera.h) against brute force: a ball it excludes holds
+// no point that the camera's perspective puts inside its image and depth range, whatever the
+// camera, nor does a polygon it excludes; a ball whose centre is inside is never excluded; and on
+// random balls and polygons it excludes many.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
+#include "core/geometry.h"
 #include "core/rng.h"
 #include "walkthrough/camera.h"
 
@@ -90,6 +93,70 @@ TEST(ViewFrustum, BallsWhoseCentreIsSeenAreKept) {
     EXPECT_FALSE(viewFrustum(c).excludesBall(centre, rng.uniform(0.0, 10.0))) << "camera " << k;
   }
   EXPECT_GT(checked, 500);
+}
+
+// Random triangles around random cameras, with their balls: whatever the ball test or the corners
+// leave out (cutPlanes, then cornersOutside) has no point in view, and the corners leave out many
+// that the ball test keeps.
+TEST(ViewFrustum, ExcludedPolygonsHoldNoSeenPoint) {
+  Rng rng{13};
+  int by_ball = 0, by_corners = 0, kept = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const FreeCamera c = randomCamera(rng);
+    const ViewFrustum frustum = viewFrustum(c);
+    const glm::dvec3 around = c.eye + rng.uniform(0.0, 1.2 * c.far) * randomUnit(rng);
+    const double size = rng.uniform(0.0, 0.5 * c.far);
+    std::vector<glm::dvec3> corners;
+    for (int v = 0; v < 3; ++v) corners.push_back(around + size * rng.uniform() * randomUnit(rng));
+    Polygon polygon;
+    polygon.vertex_count = 3;
+    const Ball ball = polygonBall(corners, polygon);
+    const unsigned cut = frustum.cutPlanes(ball.centre, ball.radius);
+    ASSERT_EQ(cut == ViewFrustum::kBallOutside, frustum.excludesBall(ball.centre, ball.radius)) << "camera " << k;
+    if (cut == ViewFrustum::kBallOutside) {
+      ++by_ball;
+    } else if (cut != 0 && frustum.cornersOutside(cut, corners)) {
+      ++by_corners;
+    } else {
+      ++kept;
+      continue;
+    }
+    for (int s = 0; s < 300; ++s) {
+      // Barycentric points, a third of them on the edges.
+      double a = rng.uniform(), b = rng.uniform();
+      if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+      if (s % 3 == 0) b = 1.0 - a;
+      const glm::dvec3 p = corners[0] + a * (corners[1] - corners[0]) + b * (corners[2] - corners[0]);
+      ASSERT_FALSE(seen(c, p)) << "camera " << k << ": a point of an excluded triangle is in view";
+    }
+  }
+  std::printf("%d triangles excluded by their ball, %d by their corners, %d kept\n", by_ball, by_corners, kept);
+  EXPECT_GT(by_corners, 300) << "the corners exclude many that the ball keeps";
+  EXPECT_GT(kept, 1000);
+}
+
+// A long wall beside the view, its ball reaching into it: excluded by its corners; turned to
+// reach into the view, kept.
+TEST(ViewFrustum, LongWallBesideTheView) {
+  FreeCamera c;
+  c.width = c.height = 100;
+  c.fov_y = 2.0 * std::atan(1.0);  // 90 degrees: the side planes are at 45 degrees
+  const CubeFrame f = cameraFrame(c);
+  auto wall = [&](const glm::dvec3& a, const glm::dvec3& b) {
+    return std::vector<glm::dvec3>{a - f.up, b - f.up, b + f.up, a + f.up};
+  };
+  // Along the right side plane, just outside it, from 1 to 40 ahead.
+  const glm::dvec3 out = 0.2 * glm::normalize(f.right - f.forward);
+  const auto beside = wall(c.eye + 1.0 * (f.forward + f.right) + out, c.eye + 40.0 * (f.forward + f.right) + out);
+  Polygon quad;
+  quad.vertex_count = 4;
+  const Ball ball = polygonBall(beside, quad);
+  const unsigned cut = viewFrustum(c).cutPlanes(ball.centre, ball.radius);
+  ASSERT_NE(cut, ViewFrustum::kBallOutside) << "its ball reaches into the view";
+  EXPECT_TRUE(viewFrustum(c).cornersOutside(cut, beside));
+  const auto across = wall(c.eye + 1.0 * (f.forward + f.right) + out, c.eye + 40.0 * f.forward);
+  const Ball ball2 = polygonBall(across, quad);
+  EXPECT_FALSE(viewFrustum(c).cornersOutside(viewFrustum(c).cutPlanes(ball2.centre, ball2.radius), across));
 }
 
 // A ball just outside one side plane is excluded; moved to touch it, it is kept.

@@ -113,6 +113,41 @@ bool ViewFrustum::excludesBall(const glm::dvec3& centre, double radius) const {
   return w < near - r || w > far + r;
 }
 
+unsigned ViewFrustum::cutPlanes(const glm::dvec3& centre, double radius) const {
+  const glm::dvec3 c = centre - eye;
+  const double r = radius + 1e-6 * (radius + std::abs(c.x) + std::abs(c.y) + std::abs(c.z));  // as excludesBall
+  unsigned cut = 0;
+  for (unsigned k = 0; k < 4; ++k) {
+    const double d = glm::dot(inward[k], c);
+    if (d < -r) return kBallOutside;
+    if (d < r) cut |= 1u << k;
+  }
+  const double w = glm::dot(forward, c);
+  if (w < near - r || w > far + r) return kBallOutside;
+  if (w < near + r) cut |= 16u;
+  if (w > far - r) cut |= 32u;
+  return cut;
+}
+
+bool ViewFrustum::cornersOutside(unsigned planes, std::span<const glm::dvec3> corners) const {
+  // Outside a plane by the margin of excludesBall for a ball of radius 0 at the corner.
+  for (unsigned k = 0; k < 6; ++k) {
+    if (!(planes & (1u << k))) continue;
+    bool all = true;
+    for (const glm::dvec3& p : corners) {
+      const glm::dvec3 q = p - eye;
+      const double m = 1e-6 * (std::abs(q.x) + std::abs(q.y) + std::abs(q.z));
+      const double d = k < 4 ? glm::dot(inward[k], q) : k == 4 ? glm::dot(forward, q) - near : far - glm::dot(forward, q);
+      if (!(d < -m)) {
+        all = false;
+        break;
+      }
+    }
+    if (all) return true;
+  }
+  return false;
+}
+
 std::array<float, 16> clipFromEyeRelative(const FreeCamera& camera) {
   WALKVIS_DCHECK(camera.width > 0 && camera.height > 0 && camera.near > 0.0 && camera.near < camera.far);
   const CubeFrame frame = cameraFrame(camera);

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <span>
 
 #include <glm/vec3.hpp>
 
@@ -69,6 +70,14 @@ struct ViewFrustum {
   // True only when the whole ball lies outside one of the planes, so nothing in it can reach a
   // pixel: a polygon inside such a ball can be left out without changing the image.
   bool excludesBall(const glm::dvec3& centre, double radius) const;
+  // The planes that cut the ball, as a mask for cornersOutside (bits 0-3 inward[k], 4 near, 5 far;
+  // 0: wholly inside them all), or kBallOutside where excludesBall is true.
+  static constexpr unsigned kBallOutside = ~0u;
+  unsigned cutPlanes(const glm::dvec3& centre, double radius) const;
+  // True only when every corner lies outside one of the planes in the mask (with excludesBall's
+  // margin for a ball of radius 0), so the polygon they span does too. For the polygons whose
+  // ball the planes cut: a long wall beside the view has a ball that reaches into it.
+  bool cornersOutside(unsigned planes, std::span<const glm::dvec3> corners) const;
 };
 ViewFrustum viewFrustum(const FreeCamera& camera);
 ViewFrustum viewFrustum(const View& view);

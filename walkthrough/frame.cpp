@@ -238,8 +238,12 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
     WALKVIS_DCHECK(world.fragment_balls.size() == n);  // World's rule: a ball per fragment
     // In place: the order of what stays is the order that was made.
     const ViewFrustum frustum = viewFrustum(camera);
+    // A fragment's corners are read only when the frustum's planes cut its ball.
     const auto kept = std::remove_if(draw.begin(), draw.end(), [&](uint32_t f) {
-      return frustum.excludesBall(world.fragment_balls[f].centre, world.fragment_balls[f].radius);
+      const unsigned cut = frustum.cutPlanes(world.fragment_balls[f].centre, world.fragment_balls[f].radius);
+      if (cut == 0 || cut == ViewFrustum::kBallOutside) return cut != 0;
+      const Polygon& p = bsp.fragments[f];
+      return frustum.cornersOutside(cut, std::span<const glm::dvec3>(bsp.vertices).subspan(p.first_vertex, p.vertex_count));
     });
     stats.outside = static_cast<uint32_t>(draw.end() - kept);
     draw.erase(kept, draw.end());

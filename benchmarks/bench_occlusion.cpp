@@ -5,7 +5,7 @@
 // frame. Its price in a whole frame, against what GL then does not draw, is `walkvis bench frames`
 // (docs/frames/).
 //
-//   bench_occlusion [--scene=gen:office] [--frames=120] [google benchmark flags]
+//   bench_occlusion [--scene=gen:office] [--tree=FILE] [--frames=120] [google benchmark flags]
 #include <benchmark/benchmark.h>
 
 #include <cstring>
@@ -24,12 +24,15 @@ struct Setup {
   std::vector<FreeCamera> cameras;
 };
 
-Setup makeSetup(const std::string& scene, uint32_t frames) {
+// With a tree file (`walkvis build SCENE --tree hfd`), its lists and the hfd mode; else PFD trees
+// built in memory for the scene.
+Setup makeSetup(const std::string& scene, const std::string& tree, uint32_t frames) {
   WorldOptions options;
-  options.build_pfd = true;
+  options.build_pfd = tree.empty();
+  options.scene = tree.empty() ? "" : scene;
   options.cull = ListCullMethod::kRegion;
   options.objects = ObjectSet::kNone;
-  Setup s{openWorld(scene, options), {}};
+  Setup s{openWorld(tree.empty() ? scene : tree, options), {}};
   for (const CameraKey& key : automaticTour(s.world.scene, s.world.trees.bsp, frames).keys) {
     FreeCamera c;
     c.eye = key.eye;
@@ -45,6 +48,7 @@ Setup makeSetup(const std::string& scene, uint32_t frames) {
 void frames(benchmark::State& state, Setup* s, OrderMode mode, int cell_pixels) {
   s->world.occlusion_culling = cell_pixels > 0;
   if (cell_pixels > 0) s->world.occlusion.cell_pixels = cell_pixels;
+  s->world.occlusion.max_rest_frames = 0;  // the buffer's cost on every frame, not its pacing
   FrameBuilder builder;
   std::vector<uint32_t> draw;
   size_t k = 0;
@@ -65,12 +69,14 @@ void frames(benchmark::State& state, Setup* s, OrderMode mode, int cell_pixels) 
 }  // namespace walkvis
 
 int main(int argc, char** argv) {
-  std::string scene = "gen:office";
+  std::string scene = "gen:office", tree;
   uint32_t frame_count = 120;
   std::vector<char*> rest;
   for (int i = 0; i < argc; ++i) {
     if (std::strncmp(argv[i], "--scene=", 8) == 0) {
       scene = argv[i] + 8;
+    } else if (std::strncmp(argv[i], "--tree=", 7) == 0) {
+      tree = argv[i] + 7;
     } else if (std::strncmp(argv[i], "--frames=", 9) == 0) {
       frame_count = static_cast<uint32_t>(std::stoul(argv[i] + 9));
     } else {
@@ -79,9 +85,10 @@ int main(int argc, char** argv) {
   }
   int rest_count = static_cast<int>(rest.size());
   benchmark::Initialize(&rest_count, rest.data());
-  auto setup = std::make_unique<walkvis::Setup>(walkvis::makeSetup(scene, frame_count));
+  auto setup = std::make_unique<walkvis::Setup>(walkvis::makeSetup(scene, tree, frame_count));
   if (setup->cameras.empty()) return 2;
-  for (auto mode : {walkvis::OrderMode::kPfd, walkvis::OrderMode::kBsp})
+  const auto listed = tree.empty() ? walkvis::OrderMode::kPfd : walkvis::OrderMode::kHfd;
+  for (auto mode : {listed, walkvis::OrderMode::kBsp})
     for (int cell : {0, 4, 8, 16})
       benchmark::RegisterBenchmark(
           (std::string(walkvis::orderModeName(mode)) + "/cell:" + std::to_string(cell)).c_str(),

@@ -190,6 +190,7 @@ TEST(FrameBuilder, OcclusionCullingKeepsTheImage) {
     for (FreeCamera camera : officeCameras(world, 10, 21)) {
       camera.pitch = pitch(rng);
       world.occlusion.cell_pixels = k++ % 2 ? 8 : 3;
+      world.occlusion.max_rest_frames = 0;  // the buffer on every frame; pacing has its own test
       for (OrderMode mode : {OrderMode::kBsp, OrderMode::kPfd, OrderMode::kHfd}) {
         DrawSettings settings;
         settings.style = DrawStyle::kIds;
@@ -210,6 +211,67 @@ TEST(FrameBuilder, OcclusionCullingKeepsTheImage) {
   std::printf("%llu of %llu fragments in view occluded over %llu frames\n", static_cast<unsigned long long>(occluded),
               static_cast<unsigned long long>(drawn), static_cast<unsigned long long>(frames));
   EXPECT_GT(occluded, drawn / 10) << "inside a room most of the building lies behind its walls";
+}
+
+// Occlusion culling's pacing (OcclusionOptions): along a tour, each test whose occluded fragments
+// reach fewer than min_occluded_pixels makes the mode rest for the next 1, 2, 4 ... frames, at most
+// max_rest_frames, and one that leaves out more sets the rest back to 1; a resting frame draws the
+// list without occlusion culling; max_rest_frames 0 never rests.
+TEST(FrameBuilder, OcclusionPacingRestsAfterTestsThatFindLittle) {
+  WorldOptions options;
+  options.build_pfd = true;
+  options.cull = ListCullMethod::kRegion;
+  options.objects = ObjectSet::kNone;
+  World world = openWorld("gen:office?rooms=12&furniture=4", options);
+  const CameraPath tour = automaticTour(world.scene, world.trees.bsp, 150);
+  ASSERT_GT(tour.keys.size(), 100u);
+  for (const uint32_t min_occluded : {0u, 4096u, 1000000000u}) {
+    for (const uint32_t most : {0u, 8u}) {
+      world.occlusion.min_occluded_pixels = min_occluded;
+      world.occlusion.max_rest_frames = most;
+      FrameBuilder builder;
+      std::vector<uint32_t> kept, all;
+      uint32_t expected_rest = 0, next_rest = 1, rested = 0, tested = 0, short_tests = 0;
+      for (const CameraKey& key : tour.keys) {
+        FreeCamera camera;
+        camera.eye = key.eye;
+        camera.yaw = key.yaw;
+        camera.width = kW;
+        camera.height = kH;
+        world.occlusion_culling = true;
+        const FrameStats s = builder.build(world, camera, OrderMode::kPfd, kept);
+        world.occlusion_culling = false;  // does not touch the pacing
+        builder.build(world, camera, OrderMode::kPfd, all);
+        ASSERT_EQ(s.occlusion_rested, expected_rest > 0) << "min " << min_occluded << " most " << most;
+        if (s.occlusion_rested) {
+          --expected_rest;
+          ++rested;
+          EXPECT_EQ(s.occluded, 0u);
+          EXPECT_EQ(kept, all);
+          continue;
+        }
+        ++tested;
+        EXPECT_EQ(s.occluded > 0, s.occluded_pixels > 0);
+        if (s.occluded_pixels < min_occluded) {
+          ++short_tests;
+          expected_rest = std::min(next_rest, most);
+          next_rest = std::min(2 * next_rest, std::max(most, 1u));
+        } else {
+          next_rest = 1;
+        }
+      }
+      if (most == 0 || min_occluded == 0) {
+        EXPECT_EQ(rested, 0u) << "min " << min_occluded << " most " << most;
+      } else {
+        EXPECT_GT(short_tests, 0u) << "min " << min_occluded;
+        EXPECT_GT(rested, 0u) << "min " << min_occluded;
+      }
+      if (min_occluded == 1000000000u && most == 8) {
+        // Every test finds little: rests of 1, 2, 4, then 8 frames, so nearly 8 frames in 9 rest.
+        EXPECT_GT(rested, 6 * tested) << rested << " rested, " << tested << " tested";
+      }
+    }
+  }
 }
 
 // The normal mask culls from the view cone through the image's corners (list_cull.h): it may drop

@@ -146,6 +146,30 @@ TEST(OcclusionBuffer, NeighbouringWallsHideTogether) {
             0);
 }
 
+// A near wall's edge and a far wall beyond it meet in the image: a small target between the two,
+// across the near wall's edge, shows in front of the far wall and is kept, whatever cells the
+// edge crosses.
+TEST(OcclusionBuffer, ATargetBetweenTwoWallsIsKept) {
+  FreeCamera c;
+  c.width = 80;
+  c.height = 60;
+  const glm::dvec3 x(1, 0, 0), y(0, 1, 0);
+  // Seen from the eye, the near wall (3 ahead) ends where the far wall (10 ahead) begins: along
+  // x / z = 0.1.
+  const Quad near_wall = {{-6, -4, -3}, {0.3, -4, -3}, {0.3, 4, -3}, {-6, 4, -3}};
+  const Quad far_wall = {{1.0, -10, -10}, {20, -10, -10}, {20, 10, -10}, {1.0, 10, -10}};
+  const Quad between = rect({0.6, 0.0, -6}, x, y, 0.1, 1.0);
+  ASSERT_GT(pixelsShowing(c, between, {near_wall, far_wall}), 0);
+  for (int cell = 2; cell <= 8; ++cell) {
+    OcclusionBuffer buffer;
+    buffer.reset(c, cell);
+    ASSERT_TRUE(buffer.addOccluder(near_wall));
+    ASSERT_TRUE(buffer.addOccluder(far_wall));
+    EXPECT_FALSE(buffer.hides(between)) << "cells of " << cell;
+    EXPECT_TRUE(buffer.hides(rect({-1.0, 0.0, -12}, x, y, 0.2, 2.0))) << "cells of " << cell << ": behind the near wall";
+  }
+}
+
 // Random rooms of rectangles around random cameras (pitched, any field of view and image shape,
 // cells of 1 to 9 pixels): no polygon the buffer hides shows at a pixel centre when the rays are
 // cast. Many are hidden, so the property is not vacuous.

@@ -248,7 +248,22 @@ FrameStats FrameBuilder::build(const World& world, const FreeCamera& camera, Ord
     stats.outside = static_cast<uint32_t>(draw.end() - kept);
     draw.erase(kept, draw.end());
   }
-  if (world.occlusion_culling && mode != OrderMode::kZBuffer) cullOccluded(world, camera, draw, stats);
+  if (world.occlusion_culling && mode != OrderMode::kZBuffer) {
+    OcclusionPace& pace = pace_[static_cast<size_t>(mode)];
+    if (pace.rest > 0) {
+      --pace.rest;
+      stats.occlusion_rested = true;
+    } else {
+      cullOccluded(world, camera, draw, stats);
+      const uint32_t most = world.occlusion.max_rest_frames;
+      if (stats.occluded_pixels < world.occlusion.min_occluded_pixels) {
+        pace.rest = std::min(pace.next_rest, most);
+        pace.next_rest = std::min(2 * pace.next_rest, std::max(most, 1u));
+      } else {
+        pace.next_rest = 1;
+      }
+    }
+  }
   stats.drawn = static_cast<uint32_t>(draw.size());
   // FrameStats' rule: what was listed is drawn, culled, outside or occluded.
   WALKVIS_DCHECK(stats.listed == stats.drawn + stats.culled + stats.outside + stats.occluded);
@@ -300,10 +315,16 @@ void FrameBuilder::cullOccluded(const World& world, const FreeCamera& camera, st
   // Only fragments that look large are tested: a small one costs GL less to draw than the test.
   const double pixels_per_unit = 0.5 * camera.height / std::tan(0.5 * camera.fov_y);
   const double min_ratio = world.occlusion.min_target_pixels / pixels_per_unit;
+  uint64_t cells = 0;
   const auto kept = std::remove_if(draw.begin(), draw.end(), [&](uint32_t f) {
-    return apparent(f) >= min_ratio * min_ratio && occlusion_.hides(corners(f));
+    if (apparent(f) < min_ratio * min_ratio) return false;
+    const uint32_t c = occlusion_.hiddenCells(corners(f));
+    cells += c;
+    return c > 0;
   });
   stats.occluded = static_cast<uint32_t>(draw.end() - kept);
+  const uint64_t cell_area = static_cast<uint64_t>(world.occlusion.cell_pixels) * static_cast<uint64_t>(world.occlusion.cell_pixels);
+  stats.occluded_pixels = static_cast<uint32_t>(std::min<uint64_t>(cells * cell_area, UINT32_MAX));
   draw.erase(kept, draw.end());
 }
 

@@ -11,6 +11,7 @@
 // fragments (bsp, zbuffer).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -93,6 +94,8 @@ struct FrameStats {
   uint32_t outside = 0;         // of what the backface method kept: wholly outside the view frustum
   uint32_t occluded = 0;        // of the rest: hidden behind the frame's occluders (occlusion_buffer.h)
   uint32_t occluders = 0;       // fragments that covered some cell of the occlusion buffer
+  uint32_t occluded_pixels = 0; // the occluded fragments' reach: pixels of the cells their tests looked at
+  bool occlusion_rested = false;  // occlusion culling on, but this frame rested (OcclusionOptions)
   uint32_t drawn = 0;           // listed - culled - outside - occluded
   uint32_t tests = 0;           // plane tests (PFD/HFD: the path's and the detail objects'; BSP: nodes visited)
   double order_ms = 0.0;        // query + culling
@@ -104,7 +107,8 @@ struct FrameStats {
   OrderMode used = OrderMode::kBsp;  // what actually produced the order (pfd falls back to bsp)
 };
 
-// Per-thread scratch; no allocation per frame once warmed up.
+// Per-thread scratch; no allocation per frame once warmed up. It also paces occlusion culling by the
+// frames it built before, per mode (OcclusionOptions), so that a walk's counts depend on its path.
 class FrameBuilder {
  public:
   // Fills `draw` with BSP fragment indices, first drawn first (back to front for painter's modes),
@@ -121,6 +125,13 @@ class FrameBuilder {
   std::vector<uint8_t> keep_;          // per fragment, for culling a BSP order with a list culler
   std::vector<ObjectTriangles> objects_;
   OcclusionBuffer occlusion_;
+  // Occlusion culling's pacing per order mode (OcclusionOptions::min_occluded_pixels): frames left to
+  // rest, and the rest after the next test that finds little.
+  struct OcclusionPace {
+    uint32_t rest = 0;
+    uint32_t next_rest = 1;
+  };
+  std::array<OcclusionPace, 4> pace_{};
   std::vector<std::pair<double, uint32_t>> candidates_;  // apparent size, fragment
   // Leaves out of `draw` (order kept) what the occlusion buffer hides: stats.occluded, occluders.
   void cullOccluded(const World& world, const FreeCamera& camera, std::vector<uint32_t>& draw, FrameStats& stats);

@@ -155,29 +155,33 @@ void OcclusionBuffer::spanAt(double y, double y0, double y1, double& xl, double&
   }
 }
 
-bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
-  if (corners.size() < 3) return false;
-  // First the cell under the image of the corners' mean, a point of the polygon: with nothing
-  // there nearer than that point, the polygon is not hidden (most that are seen end here). Where
-  // that cell is not one the full test would look at, answering no is merely cautious.
-  {
-    glm::dvec3 m(0.0);
-    for (const glm::dvec3& p : corners) m += p;
-    const glm::dvec3 c = m / static_cast<double>(corners.size()) - eye_;
+uint32_t OcclusionBuffer::hiddenCells(std::span<const glm::dvec3> corners) const {
+  if (corners.size() < 3) return 0;
+  // First the cells under a few points of the polygon, its corners' mean and the points three
+  // quarters of the way from it to each corner: with nothing there nearer than such a point, the
+  // polygon is not hidden (most that are seen end here; the corners of a partly hidden wall see
+  // past its occluder). Where such a cell is not one the full test would look at, answering no is
+  // merely cautious.
+  auto shownAt = [&](const glm::dvec3& p) {
+    const glm::dvec3 c = p - eye_;
     const double w = glm::dot(c, frame_.forward);
-    if (w >= 0.5 * near_ && w <= far_) {
-      const double x = 0.5 * (glm::dot(c, frame_.right) / (w * tx_) + 1.0) * width_;
-      const double y = 0.5 * (glm::dot(c, frame_.up) / (w * ty_) + 1.0) * height_;
-      if (x >= 0.0 && y >= 0.0 && x < width_ && y < height_) {
-        const size_t cx = std::min(static_cast<size_t>(x) / static_cast<size_t>(cell_), static_cast<size_t>(cells_x_ - 1));
-        const size_t cy = std::min(static_cast<size_t>(y) / static_cast<size_t>(cell_), static_cast<size_t>(cells_y_ - 1));
-        if (!(depth_[cy * static_cast<size_t>(cells_x_) + cx] > 1.0 / w)) return false;
-      }
-    }
-  }
+    if (!(w >= 0.5 * near_ && w <= far_)) return false;
+    const double x = 0.5 * (glm::dot(c, frame_.right) / (w * tx_) + 1.0) * width_;
+    const double y = 0.5 * (glm::dot(c, frame_.up) / (w * ty_) + 1.0) * height_;
+    if (!(x >= 0.0 && y >= 0.0 && x < width_ && y < height_)) return false;
+    const size_t cx = std::min(static_cast<size_t>(x) / static_cast<size_t>(cell_), static_cast<size_t>(cells_x_ - 1));
+    const size_t cy = std::min(static_cast<size_t>(y) / static_cast<size_t>(cell_), static_cast<size_t>(cells_y_ - 1));
+    return !(depth_[cy * static_cast<size_t>(cells_x_) + cx] > 1.0 / w);
+  };
+  glm::dvec3 m(0.0);
+  for (const glm::dvec3& p : corners) m += p;
+  m /= static_cast<double>(corners.size());
+  if (shownAt(m)) return 0;
+  for (const glm::dvec3& p : corners)
+    if (shownAt(m + 0.75 * (p - m))) return 0;
   // What GL can draw of the polygon lies beyond its near plane; half the near distance leaves a
   // margin for the float clip. Nothing there: kept all the same (the frustum test's business).
-  if (corners.size() < 3 || !project(corners, 0.5 * near_, scratch_)) return false;
+  if (!project(corners, 0.5 * near_, scratch_)) return 0;
   double y0 = kInf, y1 = -kInf, nearest = kInf;
   for (const Projected& q : scratch_) {
     y0 = std::min(y0, q.y);
@@ -198,8 +202,8 @@ bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
   const int j1 = floorIn(y1 + s - 0.5, -1, height_ - 1);
   // No pixel centre near it: GL draws none of it, but that is not being hidden (it is outside the
   // image, or too small to reach a pixel), so the answer is no.
-  if (j1 < j0) return false;
-  bool any = false;  // some cell tested: a pixel centre lies near the polygon
+  if (j1 < j0) return 0;
+  uint32_t cells = 0;  // tested: a pixel centre near the polygon lies in each
   for (int cy = j0 / cell_; cy <= j1 / cell_; ++cy) {
     // Pixel centres of this cell row that lie in the polygon's rows: their y, grown by the slack.
     const double ya = std::max(y0, std::max(cy * cell_, j0) + 0.5 - s);
@@ -221,7 +225,6 @@ bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
     const int i0 = ceilIn(xl - s - 0.5, 0, width_);
     const int i1 = floorIn(xr + s - 0.5, -1, width_ - 1);
     if (i1 < i0) continue;
-    any = true;
     const double* row = depth_.data() + static_cast<size_t>(cy) * static_cast<size_t>(cells_x_);
     const double cy_lo = static_cast<double>(cy * cell_), cy_hi = static_cast<double>((cy + 1) * cell_);
     const double ey = e * (e > 0.0 ? cy_hi : cy_lo);
@@ -231,10 +234,11 @@ bool OcclusionBuffer::hides(std::span<const glm::dvec3> corners) const {
         const double x_lo = static_cast<double>(cx * cell_), x_hi = static_cast<double>((cx + 1) * cell_);
         bound = std::min(bound, a + b * (b > 0.0 ? x_hi : x_lo) + ey);
       }
-      if (!(row[cx] > bound)) return false;
+      if (!(row[cx] > bound)) return 0;
+      ++cells;
     }
   }
-  return any;
+  return cells;
 }
 
 }  // namespace walkvis

@@ -44,6 +44,14 @@ struct OcclusionOptions {
   uint32_t max_occluders = 16;
   // Fragments are tested only when their ball looks at least this many pixels in radius.
   double min_target_pixels = 8.0;
+  // Pacing (FrameBuilder): after a frame whose test left out fragments reaching fewer than
+  // `min_occluded_pixels` (FrameStats::occluded_pixels), that mode rests from occlusion culling for
+  // 1 frame, after the next such test for 2, then 4, up to `max_rest_frames`; a test that leaves
+  // out more sets the rest back to 1. A test costs tens of microseconds; llvmpipe fills a pixel in
+  // about 8 ns, so one that saves fewer than about 2,000 pixels costs more than GL then saves
+  // (docs/frames/). max_rest_frames 0: test every frame.
+  uint32_t min_occluded_pixels = 2048;
+  uint32_t max_rest_frames = 8;
 };
 
 class OcclusionBuffer {
@@ -55,7 +63,10 @@ class OcclusionBuffer {
   bool addOccluder(std::span<const glm::dvec3> corners);
   // See the contract above; false for a polygon wholly nearer than half the near distance or with
   // a corner beyond the far plane.
-  bool hides(std::span<const glm::dvec3> corners) const;
+  bool hides(std::span<const glm::dvec3> corners) const { return hiddenCells(corners) > 0; }
+  // hides(), and what it saves: 0 when not hidden, else the cells the polygon's pixels fall in (at
+  // least 1; times cell_pixels² it bounds the pixels GL would have filled).
+  uint32_t hiddenCells(std::span<const glm::dvec3> corners) const;
 
   int cellsX() const { return cells_x_; }
   int cellsY() const { return cells_y_; }

@@ -100,9 +100,10 @@ struct ModeRun {
 };
 
 struct ModeSamples {
-  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, outside, occluded, occluders,
+  std::vector<double> frame_ms, order_ms, draw_ms, drawn, listed, tests, culled, outside, occluded, occluders, occluded_pixels,
       object_triangles, round_medians;
   uint64_t bsp_fallbacks = 0;
+  uint64_t occlusion_rests = 0;  // frames in which occlusion culling rested (its pacing)
 };
 
 int runFramesBench(const FramesBenchArgs& args) {
@@ -187,7 +188,9 @@ int runFramesBench(const FramesBenchArgs& args) {
   }
   const size_t zbuffer_run = 0, floor_run = runs.size(), ideal_run = runs.size() + 1;
   runs.push_back({"floor", OrderMode::kBsp, &main, RunKind::kFloor});
-  runs.push_back({"ideal", OrderMode::kBsp, &main, RunKind::kIdeal});
+  // The ideal places the objects through a BSP frame of the z-buffer world: without occlusion
+  // culling, so it leaves the pacing of the BSP mode's occlusion culling alone.
+  runs.push_back({"ideal", OrderMode::kBsp, &zbuffer_world, RunKind::kIdeal});
 
   // One frame of a run: a mode's own frame, the empty frame or the ideal list, timed the same way.
   auto runFrame = [&](const ModeRun& run, size_t k, DrawStyle style) {
@@ -201,7 +204,7 @@ int runFramesBench(const FramesBenchArgs& args) {
       // in every mode, so the ideal pays it too (object_ms).
       stats = builder.build(*run.world, camera, OrderMode::kBsp, draw, path.keys[k].time);
       stats.order_ms = 0.0;
-      stats.tests = stats.culled = stats.outside = stats.occluded = stats.occluders = 0;
+      stats.tests = stats.culled = stats.outside = stats.occluded = stats.occluders = stats.occluded_pixels = 0;
     }
     const std::span<const uint32_t> list =
         run.kind == RunKind::kIdeal ? std::span<const uint32_t>(ideal[k]) : std::span<const uint32_t>();
@@ -237,6 +240,8 @@ int runFramesBench(const FramesBenchArgs& args) {
         m.outside.push_back(st.outside);
         m.occluded.push_back(st.occluded);
         m.occluders.push_back(st.occluders);
+        m.occluded_pixels.push_back(st.occluded_pixels);
+        m.occlusion_rests += st.occlusion_rested;
         if (r == 0 && runs[i].kind == RunKind::kMode && runs[i].mode != OrderMode::kZBuffer && st.used != runs[i].mode)
           ++m.bsp_fallbacks;
       }
@@ -260,6 +265,8 @@ int runFramesBench(const FramesBenchArgs& args) {
   out["occlusion_cell_pixels"] = main.occlusion.cell_pixels;
   out["max_occluders"] = main.occlusion.max_occluders;
   out["occlusion_min_target_pixels"] = main.occlusion.min_target_pixels;
+  out["occlusion_min_occluded_pixels"] = main.occlusion.min_occluded_pixels;
+  out["occlusion_max_rest_frames"] = main.occlusion.max_rest_frames;
   const double zbuffer_ms = medianOf(samples[zbuffer_run].frame_ms);
   const double floor_ms = medianOf(samples[floor_run].frame_ms);
   const double ideal_ms = medianOf(samples[ideal_run].frame_ms);
@@ -312,6 +319,9 @@ int runFramesBench(const FramesBenchArgs& args) {
                     {"outside_median", medianOf(m.outside)},
                     {"occluded_median", medianOf(m.occluded)},
                     {"occluders_median", medianOf(m.occluders)},
+                    {"occluded_pixels_median", medianOf(m.occluded_pixels)},
+                    {"occlusion_rested_fraction",
+                     m.frame_ms.empty() ? 0.0 : static_cast<double>(m.occlusion_rests) / static_cast<double>(m.frame_ms.size())},
                     {"object_triangles_median", medianOf(m.object_triangles)},
                     {"speedup_vs_zbuffer", speedup},
                     {"ideal_fraction", ideal_fraction},
@@ -371,6 +381,14 @@ void addBenchFrames(CLI::App& bench, CommandRunner& runner) {
   sub->add_option("--occlusion-min-pixels", args->occlusion.min_target_pixels,
                   "Occlusion culling: test fragments whose ball looks at least this many pixels in radius")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_option("--occlusion-min-occluded-pixels", args->occlusion.min_occluded_pixels,
+                  "Occlusion culling: a test that leaves out less (pixels reached) makes the mode rest a while")
+      ->check(CLI::Range(0u, 1000000000u))
+      ->capture_default_str();
+  sub->add_option("--occlusion-max-rest", args->occlusion.max_rest_frames,
+                  "Occlusion culling: the longest rest in frames (0: test every frame)")
+      ->check(CLI::Range(0u, 1000000u))
       ->capture_default_str();
   sub->add_flag("--json", args->json, "Print JSON");
   sub->callback([args, &runner] { runner = [args] { return runFramesBench(*args); }; });

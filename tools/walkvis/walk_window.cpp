@@ -333,8 +333,9 @@ int runWalk(const WalkArgs& args) {
       ImGui::Text("%s", world.source.c_str());
       ImGui::Text("frame %.2f ms (order %.3f + draw %.2f), %.0f fps", frame_ms_smooth, stats.order_ms,
                   stats.draw_ms, ImGui::GetIO().Framerate);
-      ImGui::Text("polygons drawn %u of %u (listed %u, culled %u, outside the view %u, occluded %u)", stats.drawn,
-                  stats.scene_polygons, stats.listed, stats.culled, stats.outside, stats.occluded);
+      ImGui::Text("polygons drawn %u of %u (listed %u, culled %u, outside the view %u, occluded %u%s)", stats.drawn,
+                  stats.scene_polygons, stats.listed, stats.culled, stats.outside, stats.occluded,
+                  stats.occlusion_rested ? ", occlusion test resting" : "");
       ImGui::Text("tests per frame %u", stats.tests);
       if (!world.objects.empty())
         ImGui::Text("objects %zu: triangles drawn %u, computed %llu (Moller-Sequin culling), %.2f ms",

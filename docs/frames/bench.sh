@@ -2,10 +2,10 @@
 # Makes the tables of docs/frames/README.md again: bench frames on each scene with its default HFD
 # tree, three times: with the frames' frustum and occlusion culling (the defaults), with frustum
 # culling alone (--no-occlusion-culling), and with neither (--no-frustum-culling too).
-# usage: docs/frames/bench.sh DIR [ROUNDS]   (SCENES="a b" overrides the scenes)
+# usage: docs/frames/bench.sh DIR [ROUNDS]   (SCENES="a b" overrides the scenes; WALKVIS=binary)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
-W="$root/build/release/tools/walkvis/walkvis"
+W=${WALKVIS:-"$root/build/release/tools/walkvis/walkvis"}  # WALKVIS=other binary, for a baseline
 dir=${1:?usage: docs/frames/bench.sh DIR [ROUNDS]}
 rounds=${2:-20}
 doom=/usr/share/games/doom

@@ -1,7 +1,8 @@
 // What occlusion culling of a frame costs on the CPU (walkthrough/occlusion_buffer.h;
 // docs/DESIGN.md, "Occlusion culling of a frame"): FrameBuilder::build over the automatic tour of a
-// scene, without the occlusion buffer (cell:0) and with it at cells of 4, 8 and 16 pixels. The PFD trees are built in
-// memory, so the lists are those of the exact priority order. Counters: occluded and drawn per
+// scene, without the occlusion buffer (cell:0) and with it at cells of 4, 8 and 16 pixels, tested
+// on every frame (no pacing). The lists are a PFD tree's, built in memory (those of the exact
+// priority order), or with --tree those of an HFD tree file. Counters: occluded and drawn per
 // frame. Its price in a whole frame, against what GL then does not draw, is `walkvis bench frames`
 // (docs/frames/).
 //

@@ -72,6 +72,14 @@ CubeFrame cameraFrame(const FreeCamera& camera) {
 
 namespace {
 
+// GL gets float positions relative to the eye and a float matrix: their rounding (~6e-8 of the
+// distance each) could move a vertex just inside a plane that double arithmetic put it outside of,
+// so a ball (or a corner, radius 0) at c from the eye grows by 1e-6 of the farthest distance it
+// reaches, ten times more than that.
+double grownRadius(const glm::dvec3& c, double radius) {
+  return radius + 1e-6 * (radius + std::abs(c.x) + std::abs(c.y) + std::abs(c.z));
+}
+
 // A point p - eye = x right + y up + w forward is inside where |x| <= w tx, |y| <= w ty and
 // near <= w <= far.
 ViewFrustum frustumOf(const glm::dvec3& eye, const CubeFrame& frame, double tx, double ty, double near, double far) {
@@ -102,20 +110,12 @@ ViewFrustum viewFrustum(const View& view) {
 }
 
 bool ViewFrustum::excludesBall(const glm::dvec3& centre, double radius) const {
-  const glm::dvec3 c = centre - eye;
-  // GL gets float positions relative to the eye and a float matrix: their rounding (~6e-8 of the
-  // distance each) could move a vertex just inside a plane that double arithmetic put it outside
-  // of, so the ball grows by 1e-6 of the farthest distance it reaches, ten times more than that.
-  const double r = radius + 1e-6 * (radius + std::abs(c.x) + std::abs(c.y) + std::abs(c.z));
-  for (const glm::dvec3& n : inward)
-    if (glm::dot(n, c) < -r) return true;
-  const double w = glm::dot(forward, c);
-  return w < near - r || w > far + r;
+  return cutPlanes(centre, radius) == kBallOutside;
 }
 
 unsigned ViewFrustum::cutPlanes(const glm::dvec3& centre, double radius) const {
   const glm::dvec3 c = centre - eye;
-  const double r = radius + 1e-6 * (radius + std::abs(c.x) + std::abs(c.y) + std::abs(c.z));  // as excludesBall
+  const double r = grownRadius(c, radius);
   unsigned cut = 0;
   for (unsigned k = 0; k < 4; ++k) {
     const double d = glm::dot(inward[k], c);
@@ -130,15 +130,13 @@ unsigned ViewFrustum::cutPlanes(const glm::dvec3& centre, double radius) const {
 }
 
 bool ViewFrustum::cornersOutside(unsigned planes, std::span<const glm::dvec3> corners) const {
-  // Outside a plane by the margin of excludesBall for a ball of radius 0 at the corner.
   for (unsigned k = 0; k < 6; ++k) {
     if (!(planes & (1u << k))) continue;
     bool all = true;
     for (const glm::dvec3& p : corners) {
       const glm::dvec3 q = p - eye;
-      const double m = 1e-6 * (std::abs(q.x) + std::abs(q.y) + std::abs(q.z));
       const double d = k < 4 ? glm::dot(inward[k], q) : k == 4 ? glm::dot(forward, q) - near : far - glm::dot(forward, q);
-      if (!(d < -m)) {
+      if (!(d < -grownRadius(q, 0.0))) {
         all = false;
         break;
       }
